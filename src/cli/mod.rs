@@ -1,0 +1,82 @@
+//! The `pinsight` command line. Each subcommand lives in its own file with
+//! an `Args` struct (clap) and a `run` function; this file only dispatches.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+pub mod batch;
+pub mod calibrate;
+pub mod inspect;
+pub mod log;
+pub mod methods;
+pub mod overlay;
+pub mod render;
+pub mod simulate;
+pub mod sweep;
+pub mod tui;
+pub mod yield_report;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "pinsight",
+    version,
+    about = "Pin-insertion line workstation: clearance-joint dynamics, rig logs, connector vision, yield",
+    long_about = None
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Simulate the mechanism (kinematic, ideal or clearance-joint model).
+    Simulate(simulate::Args),
+    /// Run the parameter study (clearance × speed × material) in parallel.
+    Sweep(sweep::Args),
+    /// Load a rig log (MCAP) and report what it holds.
+    Log(log::Args),
+    /// Compare a rig log's cycles with the model's prediction.
+    Overlay(overlay::Args),
+    /// Fit clearance, standoff, process load and sensor offsets to a rig log.
+    Calibrate(calibrate::Args),
+    /// Inspect connector images against a recipe.
+    Inspect(inspect::Args),
+    /// Batch yield report over image folders or rig logs.
+    Yield(yield_report::Args),
+    /// The methods lab: work–precision, stability, fidelity, vision localisers.
+    Methods(methods::Args),
+    /// Open the terminal workstation on the given files.
+    Tui(tui::Args),
+    /// Render one pane headless (text, JSON, CSV or PNG).
+    Render(render::Args),
+    /// Run a batch script of steps and checks.
+    Batch(batch::Args),
+}
+
+/// Entry point of the binary: parses arguments, runs, and turns errors into
+/// a message on stderr and a non-zero exit code (never a panic trace).
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => tui::run_default(),
+        Some(Command::Simulate(a)) => simulate::run(a),
+        Some(Command::Sweep(a)) => sweep::run(a),
+        Some(Command::Log(a)) => log::run(a),
+        Some(Command::Overlay(a)) => overlay::run(a),
+        Some(Command::Calibrate(a)) => calibrate::run(a),
+        Some(Command::Inspect(a)) => inspect::run(a),
+        Some(Command::Yield(a)) => yield_report::run(a),
+        Some(Command::Methods(a)) => methods::run(a),
+        Some(Command::Tui(a)) => tui::run(a),
+        Some(Command::Render(a)) => render::run(a),
+        Some(Command::Batch(a)) => batch::run(a),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,39 @@
+//! # pinsight
+//!
+//! A terminal workstation for continuous pin-insertion lines: the
+//! clearance-joint dynamics of the crank – connecting rod – pin bar mechanism,
+//! rig logs (MCAP) compared cycle by cycle with the model, a pin-position /
+//! defect vision pipeline with yield reports, and a TUI whose every pane also
+//! runs headless.
+//!
+//! Layout (each module knows nothing of the terminal unless it says so):
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`model`] | mechanism parameters, presets, materials, kinematics, kinetostatics, contact laws, the clearance ODE |
+//! | [`solver`] | integrators (RK4, Dormand–Prince 5(4) and 8(5,3) with dense output, Radau IIA), event location, work counters |
+//! | [`sim`] | the simulation protocol (warmup + reported revolutions), summary figures, ensembles, prediction horizon, the parameter sweep |
+//! | [`rig`] | rig logs: MCAP loading, channel maps, signals, cycles |
+//! | [`overlay`] | measured vs predicted per cycle, residuals, calibration |
+//! | [`vision`] | connector images: recipes, pin detection, grid fit, verdicts, yield |
+//! | [`methods`] | the methods lab: work–precision, stability, fidelity |
+//! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
+//! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
+//! | [`panes`] | view models: one pure function per pane from session state to plain data |
+//! | [`tui`] | the terminal front end (ratatui + crossterm), drawing view models only |
+//! | [`batch`] | headless rendering of panes and batch scripts with checks |
+//! | [`cli`] | the `pinsight` command line |
+
+pub mod batch;
+pub mod cli;
+pub mod methods;
+pub mod model;
+pub mod overlay;
+pub mod panes;
+pub mod plot;
+pub mod progress;
+pub mod rig;
+pub mod sim;
+pub mod solver;
+pub mod tui;
+pub mod vision;

@@ -1,0 +1,1 @@
+//! Mechanism model: parameters, presets, kinematics, kinetostatics, contact, clearance ODE.
