@@ -1,0 +1,1 @@
+//! Fidelity selection (in progress).

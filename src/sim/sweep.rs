@@ -1,0 +1,1 @@
+//! Parameter sweep (in progress).
