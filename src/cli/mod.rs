@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 pub mod batch;
 pub mod calibrate;
+pub mod common;
 pub mod inspect;
 pub mod log;
 pub mod methods;

@@ -24,6 +24,10 @@ use crate::solver::roots::{bracket_root, maximize};
 use crate::solver::{Method, Scale, StepError, Stepper, StepperConfig, Tolerance};
 use std::time::Instant;
 
+/// Points per free-flight step at which δ and δ̇ are sampled on the dense
+/// output to catch contacts entered and left inside the step.
+const FREE_SAMPLES: usize = 8;
+
 /// Default RK4 step: this many steps per crank revolution.
 pub const RK4_STEPS_PER_REV: f64 = 20_000.0;
 
@@ -433,34 +437,83 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         let (d1, dd1) = pen1;
         // Look for this mode's event: onset (δ up through 0) in free
         // flight, loss (δ down through 0) in contact.
-        let sgn = if in_contact { -1.0 } else { 1.0 };
-        let mut crossing: Option<(f64, f64)> = None;
-        if sgn * d1 > 0.0 {
-            crossing = Some((t1, d1));
-        } else if sgn * dd0 > 0.0 && sgn * dd1 < 0.0 {
-            // δ turned inside the step: did it pass zero and come back?
+        // crossing = (ta, g(ta), tb, g(tb)) bracketing the event.
+        let mut crossing: Option<(f64, f64, f64, f64)> = None;
+        if in_contact {
+            if d1 < 0.0 {
+                crossing = Some((t0, d0, t1, d1));
+            } else if dd0 < 0.0 && dd1 > 0.0 {
+                // δ turned inside the step: did it dip below zero?
+                let mode = r.model.mode;
+                r.st.prepare_dense(&InMode {
+                    model: &r.model,
+                    mode,
+                });
+                let st = &r.st;
+                let m = &r.model;
+                let (tm, vm, n) = maximize(
+                    |tt| -m.penetration(tt, &st.dense(tt)).0,
+                    t0,
+                    t1,
+                    -d0,
+                    -d1,
+                    (t1 - t0) * 1e-9,
+                );
+                r.aux_evals += n as u64;
+                if vm > 0.0 {
+                    crossing = Some((t0, d0, tm, -vm));
+                    r.double_crossings += 1;
+                }
+            }
+        } else {
+            // Free flight: δ and δ̇ at FREE_SAMPLES points of the dense
+            // output, so that a contact entered and left inside the step
+            // (a double crossing, possibly after a minimum and a maximum
+            // of δ) is seen: a positive sample, or δ̇ turning from + to −
+            // in a sub-interval whose maximum is positive.
             let mode = r.model.mode;
             r.st.prepare_dense(&InMode {
                 model: &r.model,
                 mode,
             });
-            let st = &r.st;
-            let m = &r.model;
-            let (tm, vm, n) = maximize(
-                |tt| sgn * m.penetration(tt, &st.dense(tt)).0,
-                t0,
-                t1,
-                sgn * d0,
-                sgn * d1,
-                (t1 - t0) * 1e-9,
-            );
-            r.aux_evals += n as u64;
-            if vm > 0.0 {
-                crossing = Some((tm, sgn * vm));
+            let mut prev = (t0, d0, dd0);
+            for k in 1..=FREE_SAMPLES {
+                let (tk, dk, ddk) = if k == FREE_SAMPLES {
+                    (t1, d1, dd1)
+                } else {
+                    let tt = t0 + (t1 - t0) * k as f64 / FREE_SAMPLES as f64;
+                    let (d, dd) = r.model.penetration(tt, &r.st.dense(tt));
+                    r.aux_evals += 1;
+                    (tt, d, dd)
+                };
+                if dk > 0.0 {
+                    crossing = Some((prev.0, prev.1, tk, dk));
+                    break;
+                }
+                if prev.2 > 0.0 && ddk < 0.0 {
+                    let st = &r.st;
+                    let m = &r.model;
+                    let (tm, vm, n) = maximize(
+                        |tt| m.penetration(tt, &st.dense(tt)).0,
+                        prev.0,
+                        tk,
+                        prev.1,
+                        dk,
+                        (tk - prev.0) * 1e-9,
+                    );
+                    r.aux_evals += n as u64;
+                    if vm > 0.0 {
+                        crossing = Some((prev.0, prev.1, tm, vm));
+                        break;
+                    }
+                }
+                prev = (tk, dk, ddk);
+            }
+            if crossing.is_some() && d1 <= 0.0 {
                 r.double_crossings += 1;
             }
         }
-        if let Some((tb, gb)) = crossing {
+        if let Some((ta, ga, tb, gb)) = crossing {
             let mode = r.model.mode;
             r.st.prepare_dense(&InMode {
                 model: &r.model,
@@ -468,9 +521,9 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             });
             // The old side's value, kept strictly on its side.
             let ga = if in_contact {
-                d0.max(f64::MIN_POSITIVE)
+                ga.max(f64::MIN_POSITIVE)
             } else {
-                d0.min(-f64::MIN_POSITIVE)
+                ga.min(-f64::MIN_POSITIVE)
             };
             // Root of δ − target, target = ±2·floor on the new side.
             let target = if in_contact { -ev_target } else { ev_target };
@@ -482,7 +535,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
                 let m = &r.model;
                 bracket_root(
                     |tt| m.penetration(tt, &st.dense(tt)).0 - target,
-                    t0,
+                    ta,
                     ga - target,
                     tb,
                     gb - target,
