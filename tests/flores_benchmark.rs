@@ -297,27 +297,44 @@ fn thirty_revolution_statistics_within_bands() {
             ],
         ),
     ];
+    // flores-benchmark.md: a correct implementation has about a 5 % chance
+    // that one of the 18 checks fails; "repeat a failing check with 8 new
+    // realisations before calling it a discrepancy". A failing figure is
+    // rerun once with offsets 8–15 nm, and must then be inside its band.
     let mut failures = Vec::new();
+    let o = SimOptions {
+        warmup: 2.0,
+        revs: 30.0,
+        rtol: 1e-10,
+        atol: 1e-16,
+        method: Method::Dop853,
+        ..SimOptions::default()
+    };
     for (c_mm, bands) in &cases {
         let p = flores(*c_mm);
-        let o = SimOptions {
-            warmup: 2.0,
-            revs: 30.0,
-            rtol: 1e-10,
-            atol: 1e-16,
-            method: Method::Dop853,
-            ..SimOptions::default()
-        };
         let e = run_ensemble(&p, &o, 8, 1e-9, false, &Progress::hidden()).unwrap();
+        let mut retry: Option<pinsight::sim::ensemble::EnsembleResult> = None;
         for b in bands {
             let m = e.stats(b.name).unwrap().mean;
             eprintln!(
                 "c = {c_mm} mm {}: mean {m:.5} band {} – {}",
                 b.name, b.lo, b.hi
             );
-            if !(m >= b.lo && m <= b.hi) {
+            if m >= b.lo && m <= b.hi {
+                continue;
+            }
+            let r = retry.get_or_insert_with(|| {
+                let o2 = SimOptions {
+                    perturb_x4: 8e-9,
+                    ..o.clone()
+                };
+                run_ensemble(&p, &o2, 8, 1e-9, false, &Progress::hidden()).unwrap()
+            });
+            let m2 = r.stats(b.name).unwrap().mean;
+            eprintln!("  repeated with realisations 8–15 nm: mean {m2:.5}");
+            if !(m2 >= b.lo && m2 <= b.hi) {
                 failures.push(format!(
-                    "c = {c_mm} mm {}: mean {m} outside {} – {}",
+                    "c = {c_mm} mm {}: means {m} and {m2} (8 new realisations) outside {} – {}",
                     b.name, b.lo, b.hi
                 ));
             }

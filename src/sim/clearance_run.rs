@@ -394,6 +394,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
 
     let mut t = 0.0;
     let mut y = r.model.initial_state(opts.perturb_x4);
+    r.model.quadratures = t_rep == 0.0;
     r.st.reset(&r.model, t, y, true);
     let mut pen = r.model.penetration(t, &y);
     let mut q_start = 0.0;
@@ -580,6 +581,10 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             pen = pen1;
         }
         if t == t_rep && !r.tracker.started() {
+            // Reported window: turn the quadratures on and restart the
+            // stepper so its first-stage derivative includes them.
+            r.model.quadratures = true;
+            r.st.reset(&r.model, t, y, false);
             q_start = start_window(&mut r, t, &y);
         }
     }
