@@ -99,6 +99,8 @@ pub struct ClearanceModel {
     pub ideal: Kinetostatics,
     /// Rod inertia about the crank pin, I3 + m3 Lc3².
     j_a: f64,
+    inv_j_a: f64,
+    inv_m4: f64,
     pub mode: Mode,
     /// Whether the quadratures (and the ideal mechanism they compare with)
     /// are evaluated. Off during warm-up, where nothing is reported: the
@@ -127,6 +129,8 @@ impl ClearanceModel {
             x4_tdc: geom.x4_tdc(),
             ideal: Kinetostatics::of(p),
             j_a: p.i3 + p.m3 * p.lc3 * p.lc3,
+            inv_j_a: 1.0 / (p.i3 + p.m3 * p.lc3 * p.lc3),
+            inv_m4: 1.0 / p.m4,
             mode: Mode {
                 in_contact: false,
                 approach: 0.0,
@@ -214,8 +218,9 @@ impl ClearanceModel {
         self.evaluate_in(self.mode, t, y, dy)
     }
 
-    /// The full evaluation in a given mode.
-    #[inline]
+    /// The full evaluation in a given mode. Inlined into the right-hand side,
+    /// where the outputs it does not need are then never computed.
+    #[inline(always)]
     pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
         let theta2 = self.theta2(t);
         let (s2, c2) = theta2.sin_cos();
@@ -244,7 +249,8 @@ impl ClearanceModel {
         let delta = e - self.clearance;
         let dv = [v4 - vb[0], -vb[1]];
         let (n, delta_dot) = if e > 0.0 {
-            let n = [ecc[0] / e, ecc[1] / e];
+            let inv_e = 1.0 / e;
+            let n = [ecc[0] * inv_e, ecc[1] * inv_e];
             (n, dv[0] * n[0] + dv[1] * n[1])
         } else {
             ([1.0, 0.0], norm2(dv[0], dv[1]))
@@ -268,14 +274,14 @@ impl ClearanceModel {
             + cross(qa, [-f_t * tt[0], -f_t * tt[1]])
             + lc3 * m3 * cross(u3, g)
             - m3 * lc3 * cross(u3, aa);
-        let alpha3 = moment / self.j_a;
+        let alpha3 = moment * self.inv_j_a;
         // Pin bar.
         let s = x4 - self.x4_tdc;
         let f_pin_y = -f_rod[1];
         let n_g = (f_pin_y + m4 * g[1]).abs();
         let f_guide = coulomb(self.mu_g, n_g, v4, self.v0, self.v1);
         let f_proc = self.process.force(s, v4);
-        let a4 = (-f_rod[0] + m4 * g[0] + f_guide + f_proc) / m4;
+        let a4 = (-f_rod[0] + f_guide + f_proc) * self.inv_m4 + g[0];
         // Drive torque from the crank's balance: F_A = m3 a_G3 − F_rod − m3 g.
         let a_g3 = self
             .inertia

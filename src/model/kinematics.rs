@@ -93,8 +93,9 @@ impl Geometry {
         let Geometry { r, l, offset } = *self;
         let s3 = (offset - r * s2) / l;
         let c3 = (1.0 - s3 * s3).sqrt();
+        let inv_lc3 = 1.0 / (l * c3);
 
-        let omega3 = -r * c2 * omega2 / (l * c3);
+        let omega3 = -r * c2 * omega2 * inv_lc3;
         let alpha3 =
             (r * s2 * omega2 * omega2 - r * c2 * alpha2 + l * s3 * omega3 * omega3) / (l * c3);
         let x4 = r * c2 + l * c3;

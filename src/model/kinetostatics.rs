@@ -155,7 +155,7 @@ impl Kinetostatics {
     }
 
     /// [`Kinetostatics::at`] with sin θ2 and cos θ2 given.
-    #[inline]
+    #[inline(always)]
     pub fn at_sc(&self, theta2: f64, s2: f64, c2: f64, omega2: f64, alpha2: f64) -> IdealForces {
         let pose = self.geom.pose_sc(theta2, s2, c2, omega2, alpha2);
         let Inertia {
