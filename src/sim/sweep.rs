@@ -228,7 +228,8 @@ pub fn run_sweep(
         let nc = close(c, nominal.clearance_mm);
         let ns = close(s, nominal.motor_rpm);
         let nm = m == nominal.material;
-        (ns && nm) || (nc && nm) || (nc && ns)
+        // On a chart line when at least two of the three factors are nominal.
+        u8::from(nc) + u8::from(ns) + u8::from(nm) >= 2
     };
     let cases: Vec<SweepCase> = jobs
         .par_iter()
@@ -325,6 +326,9 @@ impl Factor {
     }
 }
 
+/// Picks a column of the curves.
+type Column = fn(&Curves) -> &Vec<f64>;
+
 impl SweepResult {
     /// The cases on one factor's line through the nominal point, in grid order.
     pub fn line(&self, f: Factor) -> Vec<&SweepCase> {
@@ -353,12 +357,7 @@ impl SweepResult {
     /// for the cases along one factor, each beside the ideal curve.
     pub fn curve_panels(&self, f: Factor) -> Vec<Panel> {
         let line = self.line(f);
-        let cols: [(
-            &str,
-            &str,
-            fn(&Curves) -> &Vec<f64>,
-            fn(&Curves) -> &Vec<f64>,
-        ); 4] = [
+        let cols: [(&str, &str, Column, Column); 4] = [
             (
                 "stroke",
                 "stroke (mm)",
