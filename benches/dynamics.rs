@@ -4,6 +4,7 @@
 //!   time: the paper preset simulates 0.25 s, so ≤ 12.5 ms);
 //! - the paper's whole study (4 × 5 × 5 cases, 5 revolutions, rtol 1e-8) on
 //!   all cores (target ≤ 2 s on 2 cores).
+//!
 //! Run: `cargo bench --bench dynamics`. One core for the first two: rayon is
 //! not involved in a single simulation.
 
@@ -25,7 +26,14 @@ fn window(c: &mut Criterion) {
             ..SimOptions::deterministic_window(1e-10)
         };
         g.bench_function(m.name(), |b| {
-            b.iter(|| black_box(simulate(&p, &o, &Progress::hidden()).unwrap().summary.n_impacts))
+            b.iter(|| {
+                black_box(
+                    simulate(&p, &o, &Progress::hidden())
+                        .unwrap()
+                        .summary
+                        .n_impacts,
+                )
+            })
         });
     }
     let o = SimOptions {
@@ -34,7 +42,14 @@ fn window(c: &mut Criterion) {
         ..SimOptions::deterministic_window(1e-10)
     };
     g.bench_function("rk4_T_over_20000", |b| {
-        b.iter(|| black_box(simulate(&p, &o, &Progress::hidden()).unwrap().summary.n_impacts))
+        b.iter(|| {
+            black_box(
+                simulate(&p, &o, &Progress::hidden())
+                    .unwrap()
+                    .summary
+                    .n_impacts,
+            )
+        })
     });
     g.finish();
 }
@@ -54,7 +69,12 @@ fn protocol(c: &mut Criterion) {
                 perturb_x4: f64::from(k) * 1e-9,
                 ..SimOptions::default()
             };
-            black_box(simulate(&p, &o, &Progress::hidden()).unwrap().summary.n_impacts)
+            black_box(
+                simulate(&p, &o, &Progress::hidden())
+                    .unwrap()
+                    .summary
+                    .n_impacts,
+            )
         })
     });
     g.finish();
