@@ -102,7 +102,7 @@ impl ProcessLoad {
     /// Force along x on the pin bar at stroke `s` and velocity `v4`:
     /// −F_ins(d)·c_d(v4) moving down, +F_wd(d)·c_d(|v4|) moving up, zero
     /// before the pin meets the part (d = s − standoff ≤ 0).
-    #[inline]
+    #[inline(always)]
     pub fn force(&self, s: f64, v4: f64) -> f64 {
         let d = s - self.standoff;
         if d <= 0.0 {
