@@ -61,13 +61,14 @@ fn main() {
                 if c.verdict_ok {
                     v_ok += 1;
                 }
+                let worst_h = c.height_errors.iter().map(|e| e.abs()).fold(0.0, f64::max);
                 let worst_area = c
                     .area_ratios
                     .iter()
                     .map(|(t, f)| (f - t).abs())
                     .fold(0.0, f64::max);
                 println!(
-                    "{stem:12} {:5} {} rms_ok {:.3} rms_all {:.3} mism {:?} extras {}/{} spur {} area_err_max {:.3} scale {:.5} {:.1} ms {}",
+                    "{stem:12} {:5} {} rms_ok {:.3} rms_all {:.3} mism {:?} extras {}/{} spur {} area_err_max {:.3} h_err_max {:.4} scale {:.5} {:.1} ms {}",
                     format!("{:?}", ins.verdict),
                     if c.verdict_ok { "OK " } else { "BAD" },
                     rms_ok,
@@ -77,6 +78,7 @@ fn main() {
                     c.extras_truth,
                     c.extras_spurious,
                     worst_area,
+                    worst_h,
                     ins.grid.mm_per_px,
                     ms,
                     if verbose {

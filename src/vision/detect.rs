@@ -45,20 +45,25 @@ pub fn robust_range(data: &[f32]) -> (f32, f32) {
     (q(0.001), q(0.999))
 }
 
-/// Otsu threshold of non-negative values, via imageproc on an 8-bit map of
-/// [0, max].
+/// Otsu threshold of the values, via imageproc's `otsu_level` on an 8-bit
+/// map of [min, max].
 pub fn otsu(values: &[f32], w: usize, h: usize) -> f32 {
-    let max = values.iter().cloned().fold(0f32, f32::max);
-    if !(max > 0.0) {
-        return 0.0;
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &v in values {
+        lo = lo.min(v);
+        hi = hi.max(v);
     }
+    if !(hi > lo) {
+        return lo;
+    }
+    let scale = 255.0 / (hi - lo);
     let px: Vec<u8> = values
         .iter()
-        .map(|&v| (v / max * 255.0).clamp(0.0, 255.0) as u8)
+        .map(|&v| ((v - lo) * scale).clamp(0.0, 255.0) as u8)
         .collect();
     match image::GrayImage::from_raw(w as u32, h as u32, px) {
-        Some(img) => imageproc::contrast::otsu_level(&img) as f32 / 255.0 * max,
-        None => 0.0,
+        Some(img) => lo + (imageproc::contrast::otsu_level(&img) as f32 + 0.5) / scale,
+        None => lo,
     }
 }
 
