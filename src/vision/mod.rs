@@ -32,6 +32,7 @@ pub mod image_io;
 pub mod label;
 pub mod measure;
 pub mod morph;
+pub mod overlay;
 pub mod recipe;
 pub mod result;
 pub mod side;

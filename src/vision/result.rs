@@ -5,7 +5,7 @@
 
 use super::fit::Similarity;
 use super::gray::ImageInfo;
-use super::recipe::View;
+use super::recipe::{Tolerance, View};
 use serde::{Deserialize, Serialize};
 
 /// Per-pin verdict (spec/vision.md; first match wins in this order).
@@ -176,6 +176,9 @@ pub struct Inspection {
     pub part_number: String,
     pub view: View,
     pub verdict: Verdict,
+    /// The recipe's tolerances (with defaults applied), for the report and
+    /// the overlay.
+    pub tolerance: Tolerance,
     pub image: ImageInfo,
     pub grid: GridFit,
     pub housing: Option<Housing>,
