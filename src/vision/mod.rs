@@ -30,6 +30,7 @@ pub mod gray;
 pub mod grid;
 pub mod image_io;
 pub mod label;
+pub mod log_images;
 pub mod measure;
 pub mod morph;
 pub mod overlay;
