@@ -141,8 +141,7 @@ pub fn coarse_search<P: Px>(
         .iter()
         .filter(|b| {
             let a = b.area as f64 / tip_area_c;
-            a >= 0.08
-                && a <= 10.0
+            (0.08..=10.0).contains(&a)
                 && (b.width() as f64) <= max_dim
                 && (b.height() as f64) <= max_dim
         })

@@ -317,11 +317,9 @@ pub fn place_window(
 mod tests {
     use super::*;
 
-    fn pts(
-        theta: f64,
-        missing: &[(i64, i64)],
-        bent: &[((i64, i64), (f64, f64))],
-    ) -> Vec<(f64, f64)> {
+    type Bend = ((i64, i64), (f64, f64));
+
+    fn pts(theta: f64, missing: &[(i64, i64)], bent: &[Bend]) -> Vec<(f64, f64)> {
         let lat = Lattice {
             theta,
             px: 84.7,

@@ -126,9 +126,8 @@ fn label_runs(runs: Vec<Run>, row_start: &[usize]) -> Labelling {
     let mut blobs: Vec<Blob> = Vec::new();
     let mut sx: Vec<f64> = Vec::new();
     let mut sy: Vec<f64> = Vec::new();
-    for i in 0..n {
+    for (i, &r) in runs.iter().enumerate() {
         let root = find(&mut parent, i as u32) as usize;
-        let r = runs[i];
         let len = (r.x1 - r.x0) as u64;
         let bi = if index_of_root[root] == u32::MAX {
             index_of_root[root] = blobs.len() as u32;

@@ -135,10 +135,10 @@ fn read_inner(bytes: &[u8]) -> LogImages {
                     }
                 };
                 match rec {
-                    mcap::records::Record::Channel(c) => {
-                        if c.topic == CAMERA_TOPIC && !camera_channels.contains(&c.id) {
-                            camera_channels.push(c.id);
-                        }
+                    mcap::records::Record::Channel(c)
+                        if c.topic == CAMERA_TOPIC && !camera_channels.contains(&c.id) =>
+                    {
+                        camera_channels.push(c.id);
                     }
                     mcap::records::Record::Metadata(m) if m.name == "rig" => {
                         out.meta = meta_from(&m.metadata);

@@ -23,6 +23,11 @@
 //! | [`top`], [`side`] | the two views' pipelines |
 //! | [`result`] | plain serialisable results |
 
+// Comparisons are written `!(a > b)` on purpose throughout: they are true
+// for NaN too, so a degenerate measurement takes the safe branch.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod batch;
 pub mod detect;
 pub mod error;
 pub mod fit;
@@ -35,6 +40,7 @@ pub mod measure;
 pub mod morph;
 pub mod overlay;
 pub mod recipe;
+pub mod report;
 pub mod result;
 pub mod side;
 pub mod top;

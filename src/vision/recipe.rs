@@ -187,13 +187,11 @@ impl Recipe {
         } else {
             self.pitch_mm[0]
         };
-        if self.cols > 1 || self.rows > 1 {
-            if self.pin_mm >= min_pitch {
-                return Err(format!(
-                    "pin_mm {} is not smaller than the pitch {}: pins would touch",
-                    self.pin_mm, min_pitch
-                ));
-            }
+        if (self.cols > 1 || self.rows > 1) && self.pin_mm >= min_pitch {
+            return Err(format!(
+                "pin_mm {} is not smaller than the pitch {}: pins would touch",
+                self.pin_mm, min_pitch
+            ));
         }
         if let Some(m) = self.mm_per_px {
             if !finite_pos(m) {
@@ -225,7 +223,7 @@ impl Recipe {
             ));
         }
         if let Some([lo, hi]) = t.tip_area {
-            if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < 1.0 && hi > 1.0) {
+            if !(lo.is_finite() && hi.is_finite() && (0.0..1.0).contains(&lo) && hi > 1.0) {
                 return Err(format!(
                     "tolerance.tip_area must be [low, high] with 0 <= low < 1 < high (got [{lo}, {hi}])"
                 ));
