@@ -54,8 +54,6 @@ pub fn decode_bytes(bytes: &[u8]) -> Result<(Gray, ImageInfo), VisionError> {
     };
 
     let mut limits = Limits::default();
-    limits.max_image_width = Some(65_535);
-    limits.max_image_height = Some(65_535);
     // Output buffer (≤ 64 Mpx × 8 bytes) plus decoder working memory.
     limits.max_alloc = Some(768 * 1024 * 1024);
     let mut reader = reader;

@@ -43,6 +43,7 @@ pub mod recipe;
 pub mod report;
 pub mod result;
 pub mod side;
+pub mod synth;
 pub mod top;
 pub mod truth;
 
