@@ -16,6 +16,9 @@ pub fn coarse_factor(pin_px: f64) -> usize {
 
 /// Robust spread of the samples: (p0.1, p99.9) via a histogram.
 pub fn robust_range(data: &[f32]) -> (f32, f32) {
+    // Every third sample is plenty for 0.1 % quantiles of a coarse image.
+    let sub: Vec<f32> = data.iter().step_by(3).cloned().collect();
+    let data = &sub[..];
     let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
     for &v in data {
         lo = lo.min(v);

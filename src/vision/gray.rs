@@ -11,17 +11,38 @@ use serde::Serialize;
 /// A grey sample type the pipeline reads.
 pub trait Px: Copy + Send + Sync + 'static {
     fn f(self) -> f32;
+    fn u(self) -> u32;
 }
 impl Px for u8 {
     #[inline(always)]
     fn f(self) -> f32 {
         self as f32
     }
+    #[inline(always)]
+    fn u(self) -> u32 {
+        self as u32
+    }
 }
 impl Px for u16 {
     #[inline(always)]
     fn f(self) -> f32 {
         self as f32
+    }
+    #[inline(always)]
+    fn u(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Block sums of one full-resolution row into `acc` (integer, exact).
+#[inline(always)]
+fn add_row_blocks<P: Px, const K: usize>(row: &[P], acc: &mut [u32]) {
+    for (a, chunk) in acc.iter_mut().zip(row.chunks_exact(K)) {
+        let mut s = 0u32;
+        for &v in chunk {
+            s += v.u();
+        }
+        *a += s;
     }
 }
 
@@ -160,26 +181,30 @@ pub struct Coarse {
 
 impl Coarse {
     pub fn build<P: Px>(p: &Plane<P>, k: usize, sign: f32) -> Coarse {
-        let k = k.max(1);
+        let k = k.clamp(1, 8);
         let w = p.w / k;
         let h = p.h / k;
         let mut data = vec![0f32; w * h];
-        let mut acc = vec![0f32; w];
+        let mut acc = vec![0u32; w];
         let norm = sign / (k * k) as f32;
         for j in 0..h {
-            acc.iter_mut().for_each(|a| *a = 0.0);
+            acc.iter_mut().for_each(|a| *a = 0);
             for dy in 0..k {
-                let row = &p.data[(j * k + dy) * p.w..(j * k + dy) * p.w + w * k];
-                for (i, chunk) in row.chunks_exact(k).enumerate() {
-                    let mut s = 0f32;
-                    for &v in chunk {
-                        s += v.f();
-                    }
-                    acc[i] += s;
+                let start = (j * k + dy) * p.w;
+                let row = &p.data[start..start + w * k];
+                match k {
+                    1 => add_row_blocks::<P, 1>(row, &mut acc),
+                    2 => add_row_blocks::<P, 2>(row, &mut acc),
+                    3 => add_row_blocks::<P, 3>(row, &mut acc),
+                    4 => add_row_blocks::<P, 4>(row, &mut acc),
+                    5 => add_row_blocks::<P, 5>(row, &mut acc),
+                    6 => add_row_blocks::<P, 6>(row, &mut acc),
+                    7 => add_row_blocks::<P, 7>(row, &mut acc),
+                    _ => add_row_blocks::<P, 8>(row, &mut acc),
                 }
             }
-            for i in 0..w {
-                data[j * w + i] = acc[i] * norm;
+            for (d, a) in data[j * w..(j + 1) * w].iter_mut().zip(&acc) {
+                *d = *a as f32 * norm;
             }
         }
         Coarse { w, h, k, data }

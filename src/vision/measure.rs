@@ -98,6 +98,24 @@ pub struct BlobMeasure {
     pub touches_border: bool,
 }
 
+/// A monotone stand-in for the angle of (dx, dy) in [0, 4) ("diamond
+/// angle"): no trigonometry, good enough to split a blob's surroundings
+/// into sectors.
+#[inline]
+fn diamond_angle(dy: f32, dx: f32) -> f32 {
+    let s = dx.abs() + dy.abs();
+    if s == 0.0 {
+        return 0.0;
+    }
+    if dy >= 0.0 {
+        if dx >= 0.0 { dy / s } else { 1.0 - dx / s }
+    } else if dx < 0.0 {
+        2.0 - dy / s
+    } else {
+        3.0 + dx / s
+    }
+}
+
 fn percentile(v: &mut [f32], q: f64) -> f32 {
     if v.is_empty() {
         return 0.0;
@@ -294,9 +312,8 @@ pub fn measure_blob<P: Px>(
     };
     const SECTORS: usize = 16;
     let sector_of = |x: usize, y: usize| -> usize {
-        let a = (y as f64 - b.cy).atan2(x as f64 - b.cx);
-        (((a + std::f64::consts::PI) / (2.0 * std::f64::consts::PI) * SECTORS as f64) as usize)
-            .min(SECTORS - 1)
+        let d = diamond_angle((y as f64 - b.cy) as f32, (x as f64 - b.cx) as f32);
+        ((d * (SECTORS / 4) as f32) as usize).min(SECTORS - 1)
     };
     let mut outside: Vec<Vec<f32>> = vec![Vec::new(); SECTORS];
     for y in 0..rh {

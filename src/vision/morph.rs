@@ -15,49 +15,95 @@ pub fn running_extreme(
     out: &mut [f32],
     scratch: &mut Vec<f32>,
 ) {
+    if max {
+        running::<true>(input, r, out, scratch)
+    } else {
+        running::<false>(input, r, out, scratch)
+    }
+}
+
+#[inline(always)]
+fn pick<const MAX: bool>(a: f32, b: f32) -> f32 {
+    if MAX { a.max(b) } else { a.min(b) }
+}
+
+fn running<const MAX: bool>(input: &[f32], r: usize, out: &mut [f32], scratch: &mut Vec<f32>) {
     let n = input.len();
     if n == 0 {
         return;
     }
     let w = 2 * r + 1;
-    let pad = if max {
+    let pad = if MAX {
         f32::NEG_INFINITY
     } else {
         f32::INFINITY
     };
     let m = n + 2 * r;
-    // scratch holds: padded input g (prefix extreme per block), then h (suffix).
     scratch.clear();
     scratch.resize(2 * m, pad);
     let (g, h) = scratch.split_at_mut(m);
     g[r..r + n].copy_from_slice(input);
-    h.copy_from_slice(g);
-    let pick = |a: f32, b: f32| if max { a.max(b) } else { a.min(b) };
-    // Prefix extremes within blocks of length w.
-    for i in 1..m {
-        if i % w != 0 {
-            g[i] = pick(g[i], g[i - 1]);
+    h[r..r + n].copy_from_slice(input);
+    // Prefix extremes (g) and suffix extremes (h) within blocks of w.
+    let mut b = 0;
+    while b < m {
+        let e = (b + w).min(m);
+        for i in b + 1..e {
+            g[i] = pick::<MAX>(g[i], g[i - 1]);
         }
-    }
-    // Suffix extremes within blocks.
-    for i in (0..m - 1).rev() {
-        if (i + 1) % w != 0 {
-            h[i] = pick(h[i], h[i + 1]);
+        for i in (b..e - 1).rev() {
+            h[i] = pick::<MAX>(h[i], h[i + 1]);
         }
+        b = e;
     }
-    // Window [i, i + w − 1] in padded indices = output position i.
+    // Window [i, i + w − 1] in padded indices is output position i.
     for (i, o) in out.iter_mut().enumerate().take(n) {
-        let j = i + w - 1;
-        *o = pick(h[i], if j < m { g[j] } else { pad });
+        *o = pick::<MAX>(h[i], g[i + w - 1]);
     }
 }
 
-fn pass_rows(data: &mut [f32], w: usize, r: usize, max: bool) {
-    let mut line = vec![0f32; w];
-    let mut scratch = Vec::new();
-    for row in data.chunks_exact_mut(w) {
-        running_extreme(row, r, max, &mut line, &mut scratch);
-        row.copy_from_slice(&line);
+/// Running extreme along y (columns) for every column at once: the van
+/// Herk recurrences run over whole rows, which the compiler vectorises.
+fn pass_vertical<const MAX: bool>(data: &mut [f32], w: usize, h: usize, r: usize) {
+    if h == 0 || w == 0 {
+        return;
+    }
+    let win = 2 * r + 1;
+    let pad = if MAX {
+        f32::NEG_INFINITY
+    } else {
+        f32::INFINITY
+    };
+    let m = h + 2 * r;
+    let mut g = vec![pad; m * w];
+    g[r * w..(r + h) * w].copy_from_slice(data);
+    let mut hh = g.clone();
+    let mut b = 0;
+    while b < m {
+        let e = (b + win).min(m);
+        for i in b + 1..e {
+            let (prev, cur) = g.split_at_mut(i * w);
+            let prev = &prev[(i - 1) * w..];
+            for (c, p) in cur[..w].iter_mut().zip(prev) {
+                *c = pick::<MAX>(*c, *p);
+            }
+        }
+        for i in (b..e - 1).rev() {
+            let (cur, next) = hh.split_at_mut((i + 1) * w);
+            let cur = &mut cur[i * w..];
+            for (c, n) in cur.iter_mut().zip(&next[..w]) {
+                *c = pick::<MAX>(*c, *n);
+            }
+        }
+        b = e;
+    }
+    for y in 0..h {
+        let out = &mut data[y * w..(y + 1) * w];
+        let hr = &hh[y * w..(y + 1) * w];
+        let gr = &g[(y + win - 1) * w..(y + win) * w];
+        for ((o, a), c) in out.iter_mut().zip(hr).zip(gr) {
+            *o = pick::<MAX>(*a, *c);
+        }
     }
 }
 
@@ -76,15 +122,17 @@ fn transpose(data: &[f32], w: usize, h: usize) -> Vec<f32> {
     out
 }
 
-/// Grey opening (erosion then dilation) with a (2 r + 1)² square.
+/// Grey opening (erosion then dilation) with a (2 r + 1)² square. The
+/// passes along y run row-vectorised; the passes along x run the same way
+/// on the transposed image.
 pub fn open_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
     let mut a = data.to_vec();
-    pass_rows(&mut a, w, r, false);
+    pass_vertical::<false>(&mut a, w, h, r);
     let mut t = transpose(&a, w, h);
-    pass_rows(&mut t, h, r, false);
-    pass_rows(&mut t, h, r, true);
+    pass_vertical::<false>(&mut t, h, w, r);
+    pass_vertical::<true>(&mut t, h, w, r);
     let mut b = transpose(&t, h, w);
-    pass_rows(&mut b, w, r, true);
+    pass_vertical::<true>(&mut b, w, h, r);
     b
 }
 
@@ -123,6 +171,40 @@ mod tests {
             running_extreme(&v, r, max, &mut out, &mut s);
             prop_assert_eq!(out, naive(&v, r, max));
         }
+    }
+
+    #[test]
+    fn opening_matches_naive_square_window() {
+        let (w, h, r) = (23, 17, 3);
+        let mut rng = 12345u64;
+        let img: Vec<f32> = (0..w * h)
+            .map(|_| {
+                rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1);
+                (rng >> 40) as f32 / 1000.0
+            })
+            .collect();
+        let ext = |src: &[f32], max: bool| -> Vec<f32> {
+            let mut o = vec![0f32; w * h];
+            for y in 0..h {
+                for x in 0..w {
+                    let mut v = if max {
+                        f32::NEG_INFINITY
+                    } else {
+                        f32::INFINITY
+                    };
+                    for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
+                        for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
+                            let s = src[yy * w + xx];
+                            v = if max { v.max(s) } else { v.min(s) };
+                        }
+                    }
+                    o[y * w + x] = v;
+                }
+            }
+            o
+        };
+        let want = ext(&ext(&img, false), true);
+        assert_eq!(open_square(&img, w, h, r), want);
     }
 
     #[test]
