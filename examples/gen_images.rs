@@ -269,7 +269,7 @@ fn batch(n: usize, dir: &Path) {
         match (rng.uniform() * 9.0) as u32 {
             0 => sc.pins[k].present = false,
             1 => {
-                let a = rng.range(0.0, 6.283);
+                let a = rng.range(0.0, std::f64::consts::TAU);
                 sc.pins[k].offset_mm = (0.2 * a.cos(), 0.2 * a.sin());
             }
             2 => sc.pins[k].damage = Damage::Scaled(0.65),
