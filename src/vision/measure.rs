@@ -237,7 +237,23 @@ pub fn measure_blob<P: Px>(
     // biased down (clamped to zero weight) instead of adding up.
     let mut win = mask.clone();
     let mut veff = v.clone();
-    let mut frontier: Vec<usize> = (0..rw * rh).filter(|&i| mask[i] != 0).collect();
+    // Only mask pixels with an outside 4-neighbour can grow the window.
+    let mut frontier: Vec<usize> = (0..rw * rh)
+        .filter(|&i| {
+            if mask[i] == 0 {
+                return false;
+            }
+            let (x, y) = (i % rw, i / rw);
+            x == 0
+                || y == 0
+                || x + 1 == rw
+                || y + 1 == rh
+                || mask[i - 1] == 0
+                || mask[i + 1] == 0
+                || mask[i - rw] == 0
+                || mask[i + rw] == 0
+        })
+        .collect();
     for _ in 0..dilate {
         let mut next: Vec<usize> = Vec::new();
         for &i in &frontier {
