@@ -34,6 +34,7 @@ pub mod fit;
 pub mod gray;
 pub mod grid;
 pub mod image_io;
+pub mod lab;
 pub mod label;
 pub mod log_images;
 pub mod measure;

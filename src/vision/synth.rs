@@ -513,7 +513,26 @@ impl Scene {
                     // brighter concentric core (symmetric, so the geometric
                     // centre is unchanged).
                     paint(&mut img, &shape, tip, 1.0);
-                    let (area, cx, cy) = shape.area_centroid();
+                    let (area, cx, cy) = match p.damage {
+                        // Intact (or uniformly scaled) tips are symmetric:
+                        // centre and area in closed form.
+                        Damage::None | Damage::Scaled(_) => {
+                            let f = match p.damage {
+                                Damage::Scaled(f) => f,
+                                _ => 1.0,
+                            };
+                            let (u, v) = r.nominal_uv_mm(p.row, p.col);
+                            let c = self.sim().apply(u + p.offset_mm.0, v + p.offset_mm.1);
+                            let hw = r.pin_mm / 2.0 * f;
+                            let a_mm = match r.pin_shape {
+                                PinShape::Round => std::f64::consts::PI * hw * hw,
+                                // Octagon: square minus four corner triangles of legs 0.12 hw.
+                                PinShape::Square => 4.0 * hw * hw - 2.0 * (0.12 * hw) * (0.12 * hw),
+                            };
+                            (a_mm / (self.mm_per_px * self.mm_per_px), c.0, c.1)
+                        }
+                        _ => shape.area_centroid(),
+                    };
                     let core = Shape::Disc {
                         c: (cx, cy),
                         r: 0.3 * r.pin_mm / self.mm_per_px,
@@ -760,6 +779,26 @@ mod tests {
         );
         let (a, cx, _) = cut.area_centroid();
         assert!((a - 9.0).abs() < 1e-6 && (cx - 3.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn closed_form_tip_truth_matches_integration() {
+        let r = Recipe::from_toml_str(
+            "part_number = \"T\"\nview = \"top\"\nrows = 1\ncols = 2\npitch_mm = [2.0, 2.0]\npin_mm = 0.6\npin_shape = \"square\"\npolarity = \"bright\"\nmm_per_px = 0.03\n[tolerance]\nposition_mm = 0.1\n",
+            "t",
+        )
+        .unwrap();
+        let mut sc = Scene::nominal(&r, 0.03);
+        sc.rotation_deg = 3.3;
+        sc.pins[1].offset_mm = (0.031, -0.017);
+        sc.pins[1].damage = Damage::Scaled(1.2);
+        let (_, t) = sc.render();
+        for (p, tp) in sc.pins.iter().zip(&t.pins) {
+            let (a, cx, cy) = sc.tip_shape(p).area_centroid();
+            let tip_px = 0.36 / (0.03 * 0.03);
+            assert!((tp.x_px.unwrap() - cx).abs() < 2e-3 && (tp.y_px.unwrap() - cy).abs() < 2e-3);
+            assert!((tp.area_ratio.unwrap() - a / tip_px).abs() < 1e-3);
+        }
     }
 
     #[test]
