@@ -1,13 +1,243 @@
-//! `pinsight inspect` (not yet implemented).
+//! `pinsight inspect`: inspect connector images against a recipe.
+//!
+//! Prints, per image, the verdict and a row per pin (row, col, status,
+//! position, offset, tip area ratio or height) and the extras; `--json`
+//! prints the same as JSON; `--out DIR` writes an annotated overlay PNG per
+//! image and `inspection.json`.
+//!
+//! Exit status: 0 every connector passed, 1 at least one failed, 3 at least
+//! one image could not be inspected (its reason is printed), 2 the command
+//! itself failed.
 
+use crate::vision::batch::{self, ItemResult, ItemStatus, RecipeBook};
+use crate::vision::overlay::{OverlayOptions, draw_overlay};
+use crate::vision::{InspectOptions, Localiser, View};
+use anyhow::Context;
+use std::io::Write;
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Inputs.
-    pub inputs: Vec<String>,
+    /// Recipe (TOML) of the part in the images. Repeat it for several part
+    /// numbers: rig-log images pick the recipe of the part their log names.
+    #[arg(long, short = 'r', required = true)]
+    pub recipe: Vec<PathBuf>,
+    /// Images (PNG, JPEG, BMP, TIFF; 8/16 bit, grey or colour), folders of
+    /// them, or rig logs (.mcap, images on /camera/connector).
+    #[arg(required = true)]
+    pub images: Vec<PathBuf>,
+    /// Write an annotated overlay per image (NAME.overlay.png) and
+    /// inspection.json into this folder.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print JSON (one result per image) instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Magnification of pin offsets in the overlays.
+    #[arg(long, default_value_t = 10.0)]
+    pub magnify: f64,
+    /// Centre estimator for top-view tips.
+    #[arg(long, value_enum, default_value_t = LocaliserArg::Coverage)]
+    pub localiser: LocaliserArg,
 }
 
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("`inspect` is not implemented yet")
+/// Command-line names of the localisers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LocaliserArg {
+    Centroid,
+    Weighted,
+    Coverage,
+}
+
+impl From<LocaliserArg> for Localiser {
+    fn from(a: LocaliserArg) -> Localiser {
+        match a {
+            LocaliserArg::Centroid => Localiser::Centroid,
+            LocaliserArg::Weighted => Localiser::Weighted,
+            LocaliserArg::Coverage => Localiser::Coverage,
+        }
+    }
+}
+
+/// A file name for an item's overlay (log items have `#cycle-k` in their name).
+fn overlay_name(name: &str) -> String {
+    let base = std::path::Path::new(name.split('#').next().unwrap_or(name))
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "image".into());
+    match name.split_once('#') {
+        Some((_, tail)) => format!("{base}-{}.overlay.png", tail.replace(['/', '\\'], "_")),
+        None => format!("{base}.overlay.png"),
+    }
+}
+
+fn f(v: Option<f64>, d: usize) -> String {
+    v.map(|v| format!("{v:.d$}")).unwrap_or_else(|| "–".into())
+}
+
+/// Human-readable lines for one result.
+pub fn text_report(r: &ItemResult) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let Some(ins) = &r.inspection else {
+        let msg = r
+            .error
+            .as_ref()
+            .map(|e| e.message.as_str())
+            .unwrap_or("unknown error");
+        let _ = writeln!(s, "{}: ERROR {msg}", r.name);
+        return s;
+    };
+    let c = &ins.counts;
+    let mut parts = vec![format!("ok {}", c.ok)];
+    for (n, v) in [
+        ("missing", c.missing),
+        ("damaged", c.damaged),
+        ("bent", c.bent),
+        ("short", c.short),
+        ("high", c.high),
+    ] {
+        if v > 0 {
+            parts.push(format!("{n} {v}"));
+        }
+    }
+    let _ = writeln!(
+        s,
+        "{}: {}  ({}, {} pins: {}; extras {})  grid: rotation {:.2}°, {:.5} mm/px{}, fit rms {:.3} px",
+        r.name,
+        if matches!(r.status, ItemStatus::Pass) {
+            "PASS"
+        } else {
+            "FAIL"
+        },
+        ins.part_number,
+        ins.pins.len(),
+        parts.join(", "),
+        ins.extras.len(),
+        ins.grid.rotation_deg,
+        ins.grid.mm_per_px,
+        if ins.grid.mm_per_px_estimated {
+            " (estimated)"
+        } else {
+            ""
+        },
+        ins.grid.fit_rms_px
+    );
+    let side = ins.view == View::Side;
+    let _ = writeln!(
+        s,
+        "  row col status      x_px      y_px    dx_mm    dy_mm  {}",
+        if side { "height_mm" } else { "area_ratio" }
+    );
+    for p in &ins.pins {
+        let _ = writeln!(
+            s,
+            "  {:3} {:3} {:8} {:>9} {:>9} {:>8} {:>8}  {:>9}",
+            p.row,
+            p.col,
+            p.status.as_str(),
+            f(p.x_px, 3),
+            f(p.y_px, 3),
+            f(p.dx_mm, 4),
+            f(p.dy_mm, 4),
+            if side {
+                f(p.height_mm, 4)
+            } else {
+                f(p.area_ratio, 3)
+            }
+        );
+    }
+    for e in &ins.extras {
+        let _ = writeln!(
+            s,
+            "  extra at ({:.1}, {:.1}) px, area {:.2} of a tip{}",
+            e.x_px,
+            e.y_px,
+            e.area_ratio,
+            e.distance_mm
+                .map(|d| format!(", {d:.2} mm from the housing"))
+                .unwrap_or_default()
+        );
+    }
+    for w in &ins.warnings {
+        let _ = writeln!(s, "  note: {w}");
+    }
+    s
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let book = RecipeBook::load(&args.recipe);
+    for e in &book.invalid {
+        eprintln!("warning: {e}");
+    }
+    let opts = InspectOptions {
+        localiser: args.localiser.into(),
+    };
+    let (items, mut results) = batch::collect_items(&args.images);
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let ov = OverlayOptions {
+        magnify: args.magnify,
+        ..Default::default()
+    };
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    for r in &results {
+        if !args.json {
+            write!(out, "{}", text_report(r))?;
+        }
+    }
+    for item in &items {
+        let (r, gray) = batch::inspect_item(item, &book, &opts, args.out.is_some());
+        if let (Some(dir), Some(g), Some(ins)) = (&args.out, gray.as_ref(), r.inspection.as_ref()) {
+            let img = draw_overlay(g, ins, &ov);
+            let path = dir.join(overlay_name(&r.name));
+            img.save(&path)
+                .with_context(|| format!("cannot write {}", path.display()))?;
+        }
+        if !args.json {
+            write!(out, "{}", text_report(&r))?;
+        }
+        results.push(r);
+    }
+    if args.json {
+        serde_json::to_writer_pretty(&mut out, &results)?;
+        writeln!(out)?;
+    }
+    if let Some(dir) = &args.out {
+        let p = dir.join("inspection.json");
+        std::fs::write(&p, serde_json::to_vec_pretty(&results)?)
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    let errors = results
+        .iter()
+        .filter(|r| r.status == ItemStatus::Error)
+        .count();
+    let fails = results
+        .iter()
+        .filter(|r| r.status == ItemStatus::Fail)
+        .count();
+    Ok(if errors > 0 {
+        ExitCode::from(3)
+    } else if fails > 0 {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overlay_names() {
+        assert_eq!(overlay_name("dir/a.png"), "a.overlay.png");
+        assert_eq!(
+            overlay_name("logs/run.mcap#cycle-3"),
+            "run-cycle-3.overlay.png"
+        );
+    }
 }

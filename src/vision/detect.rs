@@ -1,0 +1,174 @@
+//! Coarse search shared by both views: block-mean image, white top-hat,
+//! threshold, run-length labelling. It finds every bright (in `sign`
+//! space) blob about the size of a pin tip in a few milliseconds even at
+//! 5 MP; the sub-pixel work then happens at full resolution in small
+//! regions around each blob ([`super::measure`]).
+
+use super::gray::{Coarse, Plane, Px};
+use super::label::{self, Blob};
+use super::morph;
+
+/// Choice of the coarse factor for a tip `pin_px` pixels wide: about five
+/// coarse pixels across a tip.
+pub fn coarse_factor(pin_px: f64) -> usize {
+    ((pin_px / 5.0).round() as usize).clamp(1, 8)
+}
+
+/// Robust spread of the samples: (p0.1, p99.9) via a histogram.
+pub fn robust_range(data: &[f32]) -> (f32, f32) {
+    // Every third sample is plenty for 0.1 % quantiles of a coarse image.
+    let sub: Vec<f32> = data.iter().step_by(3).cloned().collect();
+    let data = &sub[..];
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &v in data {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(hi > lo) {
+        return (lo, hi);
+    }
+    const NB: usize = 1024;
+    let mut hist = vec![0u32; NB];
+    let scale = (NB - 1) as f32 / (hi - lo);
+    for &v in data {
+        hist[((v - lo) * scale) as usize] += 1;
+    }
+    let n = data.len() as f64;
+    let q = |frac: f64| -> f32 {
+        let target = (n * frac) as u64;
+        let mut acc = 0u64;
+        for (i, &h) in hist.iter().enumerate() {
+            acc += h as u64;
+            if acc > target {
+                return lo + i as f32 / scale;
+            }
+        }
+        hi
+    };
+    (q(0.001), q(0.999))
+}
+
+/// Otsu threshold of the values, via imageproc's `otsu_level` on an 8-bit
+/// map of [min, max].
+pub fn otsu(values: &[f32], w: usize, h: usize) -> f32 {
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &v in values {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !(hi > lo) {
+        return lo;
+    }
+    let scale = 255.0 / (hi - lo);
+    let px: Vec<u8> = values
+        .iter()
+        .map(|&v| ((v - lo) * scale).clamp(0.0, 255.0) as u8)
+        .collect();
+    match image::GrayImage::from_raw(w as u32, h as u32, px) {
+        Some(img) => lo + (imageproc::contrast::otsu_level(&img) as f32 + 0.5) / scale,
+        None => lo,
+    }
+}
+
+/// A blob found on the coarse top-hat image.
+#[derive(Debug, Clone)]
+pub struct CoarseBlob {
+    pub blob: Blob,
+    /// Highest top-hat value in it.
+    pub peak: f32,
+}
+
+/// Result of the coarse search.
+#[derive(Debug, Clone)]
+pub struct CoarseSearch {
+    pub coarse: Coarse,
+    pub tophat: Vec<f32>,
+    /// Typical tip contrast on the top-hat (median blob peak).
+    pub tip_contrast: f32,
+    pub threshold: f32,
+    pub blobs: Vec<CoarseBlob>,
+}
+
+/// Runs the coarse search. `pin_px` is the expected tip width in pixels;
+/// blobs outside `[min_area, max_area]` (in tip areas) or wider than
+/// `max_dim` tips are dropped (housing structure, noise).
+pub fn coarse_search<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    pin_px: f64,
+    mask: Option<&dyn Fn(usize, usize) -> bool>,
+) -> CoarseSearch {
+    let k = coarse_factor(pin_px);
+    let coarse = Coarse::build(plane, k, sign);
+    let pin_c = pin_px / k as f64;
+    let r = (1.1 * pin_c).ceil() as usize + 1;
+    let tophat = morph::white_top_hat(&coarse.data, coarse.w, coarse.h, r);
+    let (w, h) = (coarse.w, coarse.h);
+    let tip_area_c = pin_c * pin_c;
+    let inside = |x: usize, y: usize| mask.is_none_or(|m| m(x, y));
+    let t_otsu = otsu(&tophat, w, h);
+    // Typical tip contrast: median peak of tip-sized blobs at Otsu's level.
+    let lab = label::label(w, h, |x, y| tophat[y * w + x] > t_otsu && inside(x, y));
+    let mut peaks: Vec<f64> = lab
+        .blobs
+        .iter()
+        .filter(|b| {
+            let a = b.area as f64 / tip_area_c;
+            (0.3..3.0).contains(&a)
+        })
+        .map(|b| blob_peak(&lab, b, &tophat, w) as f64)
+        .collect();
+    let tip_contrast = super::grid::median(&mut peaks)
+        .map(|v| v as f32)
+        .unwrap_or_else(|| tophat.iter().cloned().fold(0f32, f32::max));
+    // Noise floor: robust spread of the top-hat (mostly background).
+    let mut sample: Vec<f32> = tophat.iter().step_by(7).cloned().collect();
+    let mid = sample.len() / 2;
+    let med = if sample.is_empty() {
+        0.0
+    } else {
+        *sample.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
+    };
+    let mut dev: Vec<f32> = sample.iter().map(|v| (v - med).abs()).collect();
+    let mad = if dev.is_empty() {
+        0.0
+    } else {
+        let m = dev.len() / 2;
+        *dev.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
+    };
+    let threshold = (0.35 * tip_contrast).max(med + 6.0 * 1.4826 * mad);
+    let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
+    let max_dim = 4.0 * pin_c + 2.0;
+    let blobs = lab
+        .blobs
+        .iter()
+        .filter(|b| {
+            let a = b.area as f64 / tip_area_c;
+            (0.08..=10.0).contains(&a)
+                && (b.width() as f64) <= max_dim
+                && (b.height() as f64) <= max_dim
+        })
+        .map(|b| CoarseBlob {
+            peak: blob_peak(&lab, b, &tophat, w),
+            blob: b.clone(),
+        })
+        .collect();
+    CoarseSearch {
+        coarse,
+        tophat,
+        tip_contrast,
+        threshold,
+        blobs,
+    }
+}
+
+fn blob_peak(lab: &label::Labelling, b: &Blob, values: &[f32], w: usize) -> f32 {
+    let mut p = f32::NEG_INFINITY;
+    for &ri in &b.runs {
+        let r = lab.runs[ri as usize];
+        for x in r.x0..r.x1 {
+            p = p.max(values[r.y as usize * w + x as usize]);
+        }
+    }
+    p
+}

@@ -1,0 +1,81 @@
+//! Why an image could not be inspected. Every variant reads as a sentence
+//! a technician can act on; the batch report prefixes it with the image's
+//! name.
+
+use serde::Serialize;
+
+/// An image that cannot be read or analysed (counted as `error` in yield).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VisionError {
+    #[error("cannot read file: {0}")]
+    Io(String),
+    #[error("empty file (0 bytes)")]
+    Empty,
+    #[error("not a recognised image format (PNG, JPEG, BMP, TIFF, ...); first bytes: {0}")]
+    NotImage(String),
+    #[error(
+        "image header claims {width} × {height} px, beyond the limit of {limit_mpx} Mpx: refusing to allocate it"
+    )]
+    TooLarge {
+        width: u32,
+        height: u32,
+        limit_mpx: u32,
+    },
+    #[error("image exceeds the decoder's memory limit, refusing to decode it: {0}")]
+    LimitExceeded(String),
+    #[error(
+        "image is {width} × {height} px: too small to hold a connector (minimum {min} × {min})"
+    )]
+    TooSmall { width: u32, height: u32, min: u32 },
+    #[error("corrupt or truncated {format} data: {msg}")]
+    Decode { format: String, msg: String },
+    #[error("image has no contrast (all samples between {lo} and {hi}): a blank or black frame")]
+    NoContrast { lo: f32, hi: f32 },
+    #[error("image does not match recipe {part}: {msg}")]
+    WrongPart { part: String, msg: String },
+    #[error("no pins found for recipe {part}: {msg}")]
+    NoPins { part: String, msg: String },
+    #[error("housing not found: {0}")]
+    NoHousing(String),
+    #[error("{0}")]
+    Recipe(String),
+    #[error("cancelled before this image was inspected")]
+    Cancelled,
+}
+
+/// Short machine-readable class of an error (CSV / JSON `error_kind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorKind {
+    Io,
+    Empty,
+    NotImage,
+    TooLarge,
+    TooSmall,
+    Decode,
+    NoContrast,
+    WrongPart,
+    NoPins,
+    NoHousing,
+    Recipe,
+    Cancelled,
+}
+
+impl VisionError {
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            VisionError::Io(_) => ErrorKind::Io,
+            VisionError::Empty => ErrorKind::Empty,
+            VisionError::NotImage(_) => ErrorKind::NotImage,
+            VisionError::TooLarge { .. } | VisionError::LimitExceeded(_) => ErrorKind::TooLarge,
+            VisionError::TooSmall { .. } => ErrorKind::TooSmall,
+            VisionError::Decode { .. } => ErrorKind::Decode,
+            VisionError::NoContrast { .. } => ErrorKind::NoContrast,
+            VisionError::WrongPart { .. } => ErrorKind::WrongPart,
+            VisionError::NoPins { .. } => ErrorKind::NoPins,
+            VisionError::NoHousing(_) => ErrorKind::NoHousing,
+            VisionError::Recipe(_) => ErrorKind::Recipe,
+            VisionError::Cancelled => ErrorKind::Cancelled,
+        }
+    }
+}

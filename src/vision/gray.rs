@@ -1,0 +1,275 @@
+//! Grey images at their native precision, and the coarse (block-mean)
+//! image the detector searches first.
+//!
+//! 8-bit data stays `u8` and 16-bit (or colour converted to luma) stays
+//! `u16`; the pipeline is generic over [`Px`] so neither is widened to
+//! floats over the whole frame (a 5 MP frame of `f32` costs more memory
+//! traffic than the whole detection).
+
+use serde::Serialize;
+
+/// A grey sample type the pipeline reads.
+pub trait Px: Copy + Send + Sync + 'static {
+    fn f(self) -> f32;
+    fn u(self) -> u32;
+}
+impl Px for u8 {
+    #[inline(always)]
+    fn f(self) -> f32 {
+        self as f32
+    }
+    #[inline(always)]
+    fn u(self) -> u32 {
+        self as u32
+    }
+}
+impl Px for u16 {
+    #[inline(always)]
+    fn f(self) -> f32 {
+        self as f32
+    }
+    #[inline(always)]
+    fn u(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Block sums of one full-resolution row into `acc` (integer, exact).
+#[inline(always)]
+fn add_row_blocks<P: Px, const K: usize>(row: &[P], acc: &mut [u32]) {
+    for (a, chunk) in acc.iter_mut().zip(row.chunks_exact(K)) {
+        let mut s = 0u32;
+        for &v in chunk {
+            s += v.u();
+        }
+        *a += s;
+    }
+}
+
+/// Pixel storage of a [`Gray`] image.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GrayData {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+}
+
+/// A grey image: row-major samples, x right, y down, pixel (0, 0)'s centre
+/// at (0, 0).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gray {
+    pub width: u32,
+    pub height: u32,
+    pub data: GrayData,
+}
+
+/// What the source image was (for reports).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, serde::Deserialize, Default)]
+pub struct ImageInfo {
+    pub width: u32,
+    pub height: u32,
+    /// 1 grey, 2 grey + alpha, 3 colour, 4 colour + alpha.
+    pub channels: u8,
+    /// Bits per sample of the source (8 or 16; 32 for float sources).
+    pub bit_depth: u8,
+    /// Container format ("png", "jpeg", "bmp", "tiff", ...).
+    pub format: String,
+}
+
+/// A borrowed plane of samples.
+#[derive(Debug, Clone, Copy)]
+pub struct Plane<'a, P> {
+    pub w: usize,
+    pub h: usize,
+    pub data: &'a [P],
+}
+
+impl<'a, P: Px> Plane<'a, P> {
+    #[inline(always)]
+    pub fn at(&self, x: usize, y: usize) -> f32 {
+        self.data[y * self.w + x].f()
+    }
+
+    /// Bilinear sample at a sub-pixel position (clamped to the image).
+    pub fn bilinear(&self, x: f64, y: f64) -> f32 {
+        let xm = (self.w - 1) as f64;
+        let ym = (self.h - 1) as f64;
+        let x = x.clamp(0.0, xm);
+        let y = y.clamp(0.0, ym);
+        let x0 = x.floor() as usize;
+        let y0 = y.floor() as usize;
+        let x1 = (x0 + 1).min(self.w - 1);
+        let y1 = (y0 + 1).min(self.h - 1);
+        let fx = (x - x0 as f64) as f32;
+        let fy = (y - y0 as f64) as f32;
+        let a = self.at(x0, y0) * (1.0 - fx) + self.at(x1, y0) * fx;
+        let b = self.at(x0, y1) * (1.0 - fx) + self.at(x1, y1) * fx;
+        a * (1.0 - fy) + b * fy
+    }
+}
+
+impl Gray {
+    /// An 8-bit image from raw samples (length must be width × height).
+    pub fn from_u8(width: u32, height: u32, data: Vec<u8>) -> Option<Gray> {
+        (data.len() == width as usize * height as usize).then_some(Gray {
+            width,
+            height,
+            data: GrayData::U8(data),
+        })
+    }
+
+    /// A 16-bit image from raw samples (length must be width × height).
+    pub fn from_u16(width: u32, height: u32, data: Vec<u16>) -> Option<Gray> {
+        (data.len() == width as usize * height as usize).then_some(Gray {
+            width,
+            height,
+            data: GrayData::U16(data),
+        })
+    }
+
+    /// Sample value as f32 (for tests and drawing; hot paths use planes).
+    pub fn get(&self, x: u32, y: u32) -> f32 {
+        let i = y as usize * self.width as usize + x as usize;
+        match &self.data {
+            GrayData::U8(d) => d[i] as f32,
+            GrayData::U16(d) => d[i] as f32,
+        }
+    }
+
+    /// Full-scale value of the storage type (255 or 65535).
+    pub fn full_scale(&self) -> f32 {
+        match self.data {
+            GrayData::U8(_) => 255.0,
+            GrayData::U16(_) => 65535.0,
+        }
+    }
+
+    /// An 8-bit copy for display, stretched from the data's own range
+    /// (12-bit data in a 16-bit container is shown with full contrast).
+    pub fn to_display_u8(&self) -> image::GrayImage {
+        let (lo, hi) = match &self.data {
+            GrayData::U8(_) => (0.0, 255.0),
+            GrayData::U16(d) => {
+                let lo = d.iter().copied().min().unwrap_or(0) as f32;
+                let hi = d.iter().copied().max().unwrap_or(1) as f32;
+                (lo, hi.max(lo + 1.0))
+            }
+        };
+        let scale = 255.0 / (hi - lo);
+        let px: Vec<u8> = match &self.data {
+            GrayData::U8(d) => d.clone(),
+            GrayData::U16(d) => d
+                .iter()
+                .map(|&v| ((v as f32 - lo) * scale).round().clamp(0.0, 255.0) as u8)
+                .collect(),
+        };
+        image::GrayImage::from_raw(self.width, self.height, px)
+            .unwrap_or_else(|| image::GrayImage::new(self.width, self.height))
+    }
+}
+
+/// Block-mean image: coarse pixel (i, j) is the mean of the full-resolution
+/// block [i k, i k + k) × [j k, j k + k), multiplied by `sign` (−1 turns a
+/// dark-on-bright polarity into bright-on-dark). Its centre lies at full
+/// resolution (i k + (k − 1)/2, j k + (k − 1)/2).
+#[derive(Debug, Clone)]
+pub struct Coarse {
+    pub w: usize,
+    pub h: usize,
+    pub k: usize,
+    pub data: Vec<f32>,
+}
+
+impl Coarse {
+    pub fn build<P: Px>(p: &Plane<P>, k: usize, sign: f32) -> Coarse {
+        let k = k.clamp(1, 8);
+        let w = p.w / k;
+        let h = p.h / k;
+        let mut data = vec![0f32; w * h];
+        let mut acc = vec![0u32; w];
+        let norm = sign / (k * k) as f32;
+        for j in 0..h {
+            acc.iter_mut().for_each(|a| *a = 0);
+            for dy in 0..k {
+                let start = (j * k + dy) * p.w;
+                let row = &p.data[start..start + w * k];
+                match k {
+                    1 => add_row_blocks::<P, 1>(row, &mut acc),
+                    2 => add_row_blocks::<P, 2>(row, &mut acc),
+                    3 => add_row_blocks::<P, 3>(row, &mut acc),
+                    4 => add_row_blocks::<P, 4>(row, &mut acc),
+                    5 => add_row_blocks::<P, 5>(row, &mut acc),
+                    6 => add_row_blocks::<P, 6>(row, &mut acc),
+                    7 => add_row_blocks::<P, 7>(row, &mut acc),
+                    _ => add_row_blocks::<P, 8>(row, &mut acc),
+                }
+            }
+            for (d, a) in data[j * w..(j + 1) * w].iter_mut().zip(&acc) {
+                *d = *a as f32 * norm;
+            }
+        }
+        Coarse { w, h, k, data }
+    }
+
+    #[inline(always)]
+    pub fn at(&self, x: usize, y: usize) -> f32 {
+        self.data[y * self.w + x]
+    }
+
+    /// Full-resolution position of coarse pixel centre (x, y) (fractional ok).
+    pub fn to_full(&self, x: f64, y: f64) -> (f64, f64) {
+        let k = self.k as f64;
+        (x * k + (k - 1.0) / 2.0, y * k + (k - 1.0) / 2.0)
+    }
+
+    /// Coarse position of a full-resolution point.
+    pub fn from_full(&self, x: f64, y: f64) -> (f64, f64) {
+        let k = self.k as f64;
+        ((x - (k - 1.0) / 2.0) / k, (y - (k - 1.0) / 2.0) / k)
+    }
+
+    /// Bilinear sample (clamped).
+    pub fn bilinear(&self, x: f64, y: f64) -> f32 {
+        let x = x.clamp(0.0, (self.w - 1) as f64);
+        let y = y.clamp(0.0, (self.h - 1) as f64);
+        let x0 = x.floor() as usize;
+        let y0 = y.floor() as usize;
+        let x1 = (x0 + 1).min(self.w - 1);
+        let y1 = (y0 + 1).min(self.h - 1);
+        let fx = (x - x0 as f64) as f32;
+        let fy = (y - y0 as f64) as f32;
+        let a = self.at(x0, y0) * (1.0 - fx) + self.at(x1, y0) * fx;
+        let b = self.at(x0, y1) * (1.0 - fx) + self.at(x1, y1) * fx;
+        a * (1.0 - fy) + b * fy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coarse_block_means_and_centres() {
+        let w = 8;
+        let h = 6;
+        let data: Vec<u8> = (0..w * h).map(|i| (i % w) as u8 * 10).collect();
+        let g = Plane { w, h, data: &data };
+        let c = Coarse::build(&g, 2, 1.0);
+        assert_eq!((c.w, c.h), (4, 3));
+        assert!((c.at(0, 0) - 5.0).abs() < 1e-6);
+        assert!((c.at(3, 2) - 65.0).abs() < 1e-6);
+        let inv = Coarse::build(&g, 2, -1.0);
+        assert!((inv.at(1, 1) + 25.0).abs() < 1e-6);
+        assert_eq!(c.to_full(1.0, 0.0), (2.5, 0.5));
+        assert_eq!(c.from_full(2.5, 0.5), (1.0, 0.0));
+        // Bilinear on a linear ramp is exact.
+        assert!((g.bilinear(2.25, 3.0) - 22.5).abs() < 1e-4);
+    }
+
+    #[test]
+    fn display_stretches_12_bit() {
+        let g = Gray::from_u16(2, 1, vec![0, 4095]).unwrap();
+        let d = g.to_display_u8();
+        assert_eq!(d.as_raw(), &vec![0u8, 255]);
+        assert!(Gray::from_u8(2, 2, vec![0; 3]).is_none());
+    }
+}

@@ -1,0 +1,381 @@
+//! From scattered detections to grid indices: the lattice (rotation, pitch
+//! in pixels, phase) estimated with medians over neighbour pairs, then the
+//! placement of the recipe's rows × cols window on it.
+//!
+//! Everything here is a median or a vote, so a bent pin, a missing pin or a
+//! piece of debris cannot move it; the least-squares refinement
+//! ([`super::fit::robust_similarity`]) comes after.
+
+use std::f64::consts::PI;
+
+/// A 2-D lattice in the image: point (a, b) in pitch units maps to
+/// origin + R(θ) (a px, b py).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lattice {
+    pub theta: f64,
+    pub px: f64,
+    pub py: f64,
+    pub origin: (f64, f64),
+}
+
+impl Lattice {
+    pub fn to_lattice(&self, p: (f64, f64)) -> (f64, f64) {
+        let (sn, cs) = self.theta.sin_cos();
+        let (dx, dy) = (p.0 - self.origin.0, p.1 - self.origin.1);
+        (
+            (cs * dx + sn * dy) / self.px,
+            (-sn * dx + cs * dy) / self.py,
+        )
+    }
+    pub fn to_image(&self, a: f64, b: f64) -> (f64, f64) {
+        let (sn, cs) = self.theta.sin_cos();
+        let (u, v) = (a * self.px, b * self.py);
+        (
+            self.origin.0 + cs * u - sn * v,
+            self.origin.1 + sn * u + cs * v,
+        )
+    }
+}
+
+pub(crate) fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    Some(if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    })
+}
+
+fn wrap_angle(a: f64) -> f64 {
+    // Fold into (−π/2, π/2]: a row direction and its reverse are the same.
+    let mut a = a % PI;
+    if a > PI / 2.0 {
+        a -= PI;
+    } else if a <= -PI / 2.0 {
+        a += PI;
+    }
+    a
+}
+
+/// Why no lattice could be estimated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LatticeError {
+    /// Fewer than one point.
+    NoPoints,
+    /// No neighbours at the expected pitch (known scale): the measured
+    /// nearest-neighbour spacing is given.
+    PitchMismatch { expected_px: f64, found_px: f64 },
+}
+
+/// Maximum tilt of the part against the image axes that the pair search
+/// accepts (the spec promises ±5°).
+pub const MAX_TILT_DEG: f64 = 12.0;
+
+/// Estimates the lattice from pin-like points.
+///
+/// `pitch_px`: the expected (x, y) pitch in pixels when the scale is known;
+/// otherwise it is estimated from nearest-neighbour spacings along the
+/// rows (or the column, for one-column parts) with `pitch_ratio` = py / px.
+pub fn estimate_lattice(
+    pts: &[(f64, f64)],
+    pitch_px: Option<(f64, f64)>,
+    pitch_ratio: f64,
+    rows: u32,
+    cols: u32,
+) -> Result<Lattice, LatticeError> {
+    if pts.is_empty() {
+        return Err(LatticeError::NoPoints);
+    }
+    let tilt = MAX_TILT_DEG.to_radians();
+    let n = pts.len();
+    // Nearest neighbour along each axis direction.
+    let nearest = |horizontal: bool| -> Vec<f64> {
+        let mut out = Vec::new();
+        for i in 0..n {
+            let mut best = f64::INFINITY;
+            for j in 0..n {
+                if i == j {
+                    continue;
+                }
+                let (dx, dy) = (pts[j].0 - pts[i].0, pts[j].1 - pts[i].1);
+                let ang = wrap_angle(dy.atan2(dx));
+                let ok = if horizontal {
+                    ang.abs() < tilt
+                } else {
+                    (PI / 2.0 - ang.abs()) < tilt
+                };
+                if ok {
+                    best = best.min((dx * dx + dy * dy).sqrt());
+                }
+            }
+            if best.is_finite() {
+                out.push(best);
+            }
+        }
+        out
+    };
+    let (px, py) = match pitch_px {
+        Some(p) => p,
+        None => {
+            if cols > 1 {
+                let mut d = nearest(true);
+                let px = median(&mut d).ok_or(LatticeError::NoPoints)?;
+                (px, px * pitch_ratio)
+            } else if rows > 1 {
+                let mut d = nearest(false);
+                let py = median(&mut d).ok_or(LatticeError::NoPoints)?;
+                (py / pitch_ratio, py)
+            } else {
+                return Err(LatticeError::NoPoints);
+            }
+        }
+    };
+    // Rotation: median direction of neighbour pairs at one pitch.
+    let mut angles = Vec::new();
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let (dx, dy) = (pts[j].0 - pts[i].0, pts[j].1 - pts[i].1);
+            let d = (dx * dx + dy * dy).sqrt();
+            let ang = wrap_angle(dy.atan2(dx));
+            if cols > 1 && (d / px - 1.0).abs() < 0.2 && ang.abs() < tilt {
+                angles.push(ang);
+            }
+            if rows > 1 && (d / py - 1.0).abs() < 0.2 && (PI / 2.0 - ang.abs()) < tilt {
+                let a = if ang > 0.0 {
+                    ang - PI / 2.0
+                } else {
+                    ang + PI / 2.0
+                };
+                angles.push(a);
+            }
+        }
+    }
+    if angles.is_empty() && n >= 3 && pitch_px.is_some() {
+        let mut d = nearest(true);
+        d.extend(nearest(false));
+        let found = median(&mut d).unwrap_or(f64::NAN);
+        let expected = if cols > 1 { px } else { py };
+        if found.is_finite() && (found / expected - 1.0).abs() > 0.2 {
+            return Err(LatticeError::PitchMismatch {
+                expected_px: expected,
+                found_px: found,
+            });
+        }
+    }
+    let theta = median(&mut angles).unwrap_or(0.0);
+    // Phase: circular mean of the lattice coordinates, then refined on the
+    // points near the lattice.
+    // Origin: the point that puts the most others near lattice nodes (a
+    // debris blob off the lattice cannot win this vote).
+    let mut lat = Lattice {
+        theta,
+        px,
+        py,
+        origin: pts[0],
+    };
+    let mut best_votes = 0usize;
+    for &o in pts.iter().take(64) {
+        let l = Lattice { origin: o, ..lat };
+        let votes = pts
+            .iter()
+            .filter(|&&p| {
+                let (a, b) = l.to_lattice(p);
+                (a - a.round()).abs() < 0.2 && (b - b.round()).abs() < 0.2
+            })
+            .count();
+        if votes > best_votes {
+            best_votes = votes;
+            lat.origin = o;
+        }
+    }
+    for _ in 0..2 {
+        let (mut ca, mut sa, mut cb, mut sb) = (0.0, 0.0, 0.0, 0.0);
+        for &p in pts {
+            let (a, b) = lat.to_lattice(p);
+            let (fa, fb) = (a - a.round(), b - b.round());
+            if fa.abs() < 0.3 && fb.abs() < 0.3 {
+                ca += (2.0 * PI * a).cos();
+                sa += (2.0 * PI * a).sin();
+                cb += (2.0 * PI * b).cos();
+                sb += (2.0 * PI * b).sin();
+            }
+        }
+        let pa = if ca == 0.0 && sa == 0.0 {
+            0.0
+        } else {
+            sa.atan2(ca) / (2.0 * PI)
+        };
+        let pb = if cb == 0.0 && sb == 0.0 {
+            0.0
+        } else {
+            sb.atan2(cb) / (2.0 * PI)
+        };
+        lat.origin = lat.to_image(pa, pb);
+    }
+    Ok(lat)
+}
+
+/// A point's place on the lattice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LatticeIndex {
+    pub a: i64,
+    pub b: i64,
+    /// Residual in pitch units.
+    pub ra: f64,
+    pub rb: f64,
+}
+
+/// Integer lattice index of a point when within `tol` pitch of a node.
+pub fn index_of(lat: &Lattice, p: (f64, f64), tol: f64) -> Option<LatticeIndex> {
+    let (a, b) = lat.to_lattice(p);
+    let (ia, ib) = (a.round(), b.round());
+    let (ra, rb) = (a - ia, b - ib);
+    (ra.abs() < tol && rb.abs() < tol).then_some(LatticeIndex {
+        a: ia as i64,
+        b: ib as i64,
+        ra,
+        rb,
+    })
+}
+
+/// Where the recipe's window sits on the lattice: lattice (a, b) of
+/// grid position (row, col) = (col + col0, row + row0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    pub col0: i64,
+    pub row0: i64,
+    /// Members on valid positions.
+    pub score: usize,
+    /// More than one placement scored best; the tie was broken by `anchor`
+    /// (or, without one, by centring on the members).
+    pub ambiguous: bool,
+}
+
+/// Chooses the placement of the rows × cols window (minus `skipped`)
+/// covering most members; ties go to the placement whose grid centre is
+/// nearest `anchor` (the housing centre in lattice units).
+pub fn place_window(
+    members: &[(i64, i64)],
+    rows: u32,
+    cols: u32,
+    skipped: &dyn Fn(u32, u32) -> bool,
+    anchor: Option<(f64, f64)>,
+) -> Option<Placement> {
+    if members.is_empty() {
+        return None;
+    }
+    let amin = members.iter().map(|m| m.0).min()?;
+    let amax = members.iter().map(|m| m.0).max()?;
+    let bmin = members.iter().map(|m| m.1).min()?;
+    let bmax = members.iter().map(|m| m.1).max()?;
+    let mut scored = Vec::new();
+    for row0 in (bmin - rows as i64 + 1)..=bmax {
+        for col0 in (amin - cols as i64 + 1)..=amax {
+            let score = members
+                .iter()
+                .filter(|&&(a, b)| {
+                    let (c, r) = (a - col0, b - row0);
+                    c >= 0
+                        && r >= 0
+                        && c < cols as i64
+                        && r < rows as i64
+                        && !skipped(r as u32, c as u32)
+                })
+                .count();
+            scored.push((row0, col0, score));
+        }
+    }
+    let best = scored.iter().map(|s| s.2).max()?;
+    let ties: Vec<_> = scored.iter().filter(|s| s.2 == best).collect();
+    let centre_of = |row0: i64, col0: i64| {
+        (
+            col0 as f64 + (cols as f64 - 1.0) / 2.0,
+            row0 as f64 + (rows as f64 - 1.0) / 2.0,
+        )
+    };
+    let target = anchor.unwrap_or(((amin + amax) as f64 / 2.0, (bmin + bmax) as f64 / 2.0));
+    let pick = ties.iter().min_by(|x, y| {
+        let cx = centre_of(x.0, x.1);
+        let cy = centre_of(y.0, y.1);
+        let dx = (cx.0 - target.0).powi(2) + (cx.1 - target.1).powi(2);
+        let dy = (cy.0 - target.0).powi(2) + (cy.1 - target.1).powi(2);
+        dx.total_cmp(&dy)
+    })?;
+    Some(Placement {
+        row0: pick.0,
+        col0: pick.1,
+        score: best,
+        ambiguous: ties.len() > 1,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Bend = ((i64, i64), (f64, f64));
+
+    fn pts(theta: f64, missing: &[(i64, i64)], bent: &[Bend]) -> Vec<(f64, f64)> {
+        let lat = Lattice {
+            theta,
+            px: 84.7,
+            py: 84.7,
+            origin: (130.2, 350.9),
+        };
+        let mut v = Vec::new();
+        for b in 0..2 {
+            for a in 0..10 {
+                if missing.contains(&(a, b)) {
+                    continue;
+                }
+                let mut p = lat.to_image(a as f64, b as f64);
+                for ((ba, bb), d) in bent {
+                    if (*ba, *bb) == (a, b) {
+                        p.0 += d.0;
+                        p.1 += d.1;
+                    }
+                }
+                v.push(p);
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn lattice_from_points_with_defects() {
+        let theta = 3f64.to_radians();
+        let p = pts(theta, &[(3, 0)], &[((7, 1), (8.0, 3.0))]);
+        for pitch in [Some((84.7, 84.7)), None] {
+            let lat = estimate_lattice(&p, pitch, 1.0, 2, 10).unwrap();
+            assert!((lat.theta - theta).abs() < 1e-9, "{}", lat.theta);
+            assert!((lat.px - 84.7).abs() < 1e-6);
+            let members: Vec<_> = p.iter().filter_map(|&q| index_of(&lat, q, 0.3)).collect();
+            assert_eq!(members.len(), 19);
+        }
+        // Wrong pitch for the recipe: found spacing reported.
+        let e = estimate_lattice(&p, Some((50.0, 50.0)), 1.0, 2, 10).unwrap_err();
+        assert!(
+            matches!(e, LatticeError::PitchMismatch { found_px, .. } if (found_px - 84.7).abs() < 1.0)
+        );
+    }
+
+    #[test]
+    fn window_placement_and_housing_anchor() {
+        let full: Vec<(i64, i64)> = (0..2)
+            .flat_map(|b| (0..10).map(move |a| (a + 5, b - 1)))
+            .collect();
+        let none = |_: u32, _: u32| false;
+        let p = place_window(&full, 2, 10, &none, None).unwrap();
+        assert_eq!((p.col0, p.row0, p.score, p.ambiguous), (5, -1, 20, false));
+        // Whole end column missing: two placements fit; the anchor decides.
+        let cut: Vec<_> = full.iter().copied().filter(|m| m.0 != 14).collect();
+        let left = place_window(&cut, 2, 10, &none, Some((9.5, -0.5))).unwrap();
+        assert_eq!((left.col0, left.ambiguous), (5, true));
+        let right = place_window(&cut, 2, 10, &none, Some((8.5, -0.5))).unwrap();
+        assert_eq!(right.col0, 4);
+    }
+}

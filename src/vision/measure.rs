@@ -1,0 +1,415 @@
+//! Sub-pixel measurement of one bright blob (a pin tip, or debris) in a
+//! small region of interest at full resolution: local levels, threshold,
+//! area and centre.
+//!
+//! Several localisers are offered (the methods lab compares them):
+//! - [`Localiser::Centroid`]: mean position of the pixels above the
+//!   half-contrast threshold (binary centroid; quantised by the pixel grid).
+//! - [`Localiser::Weighted`]: intensity-weighted centroid, weights
+//!   `v − threshold` over the thresholded blob (the classic OpenCV recipe).
+//! - [`Localiser::Coverage`]: the default. Each pixel's weight is its
+//!   estimated coverage by the tip, `clamp((v − lo) / (hi − lo), 0, 1)`,
+//!   with `lo` the surrounding level and `hi` the level at the tip's rim,
+//!   over the blob dilated by the blur's reach. Inside the tip the weight
+//!   saturates at 1, so the specular dome and shading gradients of the tip
+//!   carry no weight, and at the rim it is the pixel's area fraction: the
+//!   result is the area centroid (the spec's definition of a damaged tip's
+//!   centre, and the geometric centre of an intact one).
+//!
+//! Values are read through `sign` (+1 bright tips, −1 dark tips), so dark
+//! polarity needs no inverted copy of the image.
+
+use super::gray::{Plane, Px};
+use super::label;
+use serde::{Deserialize, Serialize};
+
+/// How a blob's centre is estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Localiser {
+    Centroid,
+    Weighted,
+    #[default]
+    Coverage,
+}
+
+impl Localiser {
+    pub const ALL: [Localiser; 3] = [
+        Localiser::Centroid,
+        Localiser::Weighted,
+        Localiser::Coverage,
+    ];
+    pub fn name(&self) -> &'static str {
+        match self {
+            Localiser::Centroid => "binary centroid",
+            Localiser::Weighted => "intensity-weighted centroid",
+            Localiser::Coverage => "coverage (area) centroid",
+        }
+    }
+}
+
+/// Inclusive-exclusive pixel rectangle [x0, x1) × [y0, y1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Roi {
+    pub x0: usize,
+    pub y0: usize,
+    pub x1: usize,
+    pub y1: usize,
+}
+
+impl Roi {
+    /// Rectangle around (x0..=x1, y0..=y1) grown by `m`, clipped to w × h.
+    pub fn around(x0: f64, y0: f64, x1: f64, y1: f64, m: f64, w: usize, h: usize) -> Roi {
+        let cl = |v: f64, hi: usize| v.clamp(0.0, hi as f64) as usize;
+        Roi {
+            x0: cl((x0 - m).floor(), w),
+            y0: cl((y0 - m).floor(), h),
+            x1: cl((x1 + m).ceil() + 1.0, w),
+            y1: cl((y1 + m).ceil() + 1.0, h),
+        }
+    }
+    pub fn w(&self) -> usize {
+        self.x1.saturating_sub(self.x0)
+    }
+    pub fn h(&self) -> usize {
+        self.y1.saturating_sub(self.y0)
+    }
+}
+
+/// One measured blob.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BlobMeasure {
+    /// Centre, full-resolution pixels.
+    pub x: f64,
+    pub y: f64,
+    /// Area, pixels² (coverage sum).
+    pub area_px: f64,
+    /// Surrounding level and tip level (in `sign` space).
+    pub lo: f32,
+    pub hi: f32,
+    pub peak: f32,
+    /// Threshold used for the blob mask.
+    pub threshold: f32,
+    /// sqrt(λmax / λmin) of the mask's second moments.
+    pub elongation: f64,
+    /// Pixels in the blob mask.
+    pub mask_px: usize,
+    /// True when the mask reaches the ROI border (the blob may be cut).
+    pub touches_border: bool,
+}
+
+/// A monotone stand-in for the angle of (dx, dy) in [0, 4) ("diamond
+/// angle"): no trigonometry, good enough to split a blob's surroundings
+/// into sectors.
+#[inline]
+fn diamond_angle(dy: f32, dx: f32) -> f32 {
+    let s = dx.abs() + dy.abs();
+    if s == 0.0 {
+        return 0.0;
+    }
+    if dy >= 0.0 {
+        if dx >= 0.0 { dy / s } else { 1.0 - dx / s }
+    } else if dx < 0.0 {
+        2.0 - dy / s
+    } else {
+        3.0 + dx / s
+    }
+}
+
+fn percentile(v: &mut [f32], q: f64) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let i = ((v.len() - 1) as f64 * q).round() as usize;
+    let (_, x, _) = v.select_nth_unstable_by(i, |a, b| a.total_cmp(b));
+    *x
+}
+
+/// Measures the blob nearest `seed` inside `roi`.
+///
+/// `dilate` is how far (px) beyond the half-level mask the coverage window
+/// reaches (≈ 2 σ of the blur + 1).
+pub fn measure_blob<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    roi: Roi,
+    seed: (f64, f64),
+    loc: Localiser,
+    dilate: usize,
+) -> Option<BlobMeasure> {
+    let (rw, rh) = (roi.w(), roi.h());
+    if rw < 3 || rh < 3 {
+        return None;
+    }
+    let mut v = vec![0f32; rw * rh];
+    for y in 0..rh {
+        let row = &plane.data[(roi.y0 + y) * plane.w + roi.x0..(roi.y0 + y) * plane.w + roi.x1];
+        for (o, s) in v[y * rw..(y + 1) * rw].iter_mut().zip(row) {
+            *o = sign * s.f();
+        }
+    }
+    // Surrounding level: median of the ROI's border ring (2 px).
+    let mut ring = Vec::with_capacity(4 * (rw + rh));
+    for y in 0..rh {
+        for x in 0..rw {
+            if x < 2 || y < 2 || x + 2 >= rw || y + 2 >= rh {
+                ring.push(v[y * rw + x]);
+            }
+        }
+    }
+    let lo0 = percentile(&mut ring, 0.5);
+    let mut all = v.clone();
+    let peak = percentile(&mut all, 0.995);
+    if !(peak > lo0) {
+        return None;
+    }
+    let mut thr = 0.5 * (lo0 + peak);
+    // Pick the component nearest the seed; iterate the threshold once on the
+    // tip's own plateau (median inside the first mask), which is robust to a
+    // glint or a saturated specular spot.
+    let (sx, sy) = (seed.0 - roi.x0 as f64, seed.1 - roi.y0 as f64);
+    let mut comp: Option<(label::Labelling, usize)> = None;
+    let mut hi = peak;
+    for pass in 0..2 {
+        let lab = label::label(rw, rh, |x, y| v[y * rw + x] > thr);
+        let best = lab
+            .blobs
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                // Distance from the seed to the bounding box (0 inside), then size.
+                let dx = (b.x_min as f64 - sx).max(sx - b.x_max as f64).max(0.0);
+                let dy = (b.y_min as f64 - sy).max(sy - b.y_max as f64).max(0.0);
+                (i, dx * dx + dy * dy, b.area)
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(b.2.cmp(&a.2)))
+            .map(|t| t.0)?;
+        if pass == 0 {
+            let b = &lab.blobs[best];
+            let mut inside: Vec<f32> = Vec::with_capacity(b.area as usize);
+            for &ri in &b.runs {
+                let r = lab.runs[ri as usize];
+                inside.extend_from_slice(
+                    &v[r.y as usize * rw + r.x0 as usize..r.y as usize * rw + r.x1 as usize],
+                );
+            }
+            hi = percentile(&mut inside, 0.5);
+            thr = 0.5 * (lo0 + hi);
+        }
+        comp = Some((lab, best));
+    }
+    let (lab, bi) = comp?;
+    let b = &lab.blobs[bi];
+    let touches_border =
+        b.x_min == 0 || b.y_min == 0 || b.x_max as usize + 1 == rw || b.y_max as usize + 1 == rh;
+
+    // Mask and its dilation (square, radius `dilate`).
+    let mut mask = vec![0u8; rw * rh];
+    for &ri in &b.runs {
+        let r = lab.runs[ri as usize];
+        for x in r.x0..r.x1 {
+            mask[r.y as usize * rw + x as usize] = 1;
+        }
+    }
+    // Second moments of the mask (shape).
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for &ri in &b.runs {
+        let r = lab.runs[ri as usize];
+        let dy = r.y as f64 - b.cy;
+        for x in r.x0..r.x1 {
+            let dx = x as f64 - b.cx;
+            sxx += dx * dx;
+            syy += dy * dy;
+            sxy += dx * dy;
+        }
+    }
+    let n = b.area as f64;
+    let (a, c, d) = (sxx / n + 1.0 / 12.0, syy / n + 1.0 / 12.0, sxy / n);
+    let tr = a + c;
+    let disc = ((a - c) * (a - c) / 4.0 + d * d).sqrt();
+    let elongation = ((tr / 2.0 + disc) / (tr / 2.0 - disc).max(1e-9)).sqrt();
+
+    // Window: the mask grown ring by ring (8-neighbours) `dilate` times.
+    // Each outside pixel gets an effective value min(own, brightest inner
+    // neighbour's effective value): the profile may only fall going
+    // outward, so beyond the dark clearance gap the brighter housing takes
+    // the gap's level and carries no weight, and background noise is
+    // biased down (clamped to zero weight) instead of adding up.
+    let mut win = mask.clone();
+    let mut veff = v.clone();
+    // Only mask pixels with an outside 4-neighbour can grow the window.
+    let mut frontier: Vec<usize> = (0..rw * rh)
+        .filter(|&i| {
+            if mask[i] == 0 {
+                return false;
+            }
+            let (x, y) = (i % rw, i / rw);
+            x == 0
+                || y == 0
+                || x + 1 == rw
+                || y + 1 == rh
+                || mask[i - 1] == 0
+                || mask[i + 1] == 0
+                || mask[i - rw] == 0
+                || mask[i + rw] == 0
+        })
+        .collect();
+    for _ in 0..dilate {
+        let mut next: Vec<usize> = Vec::new();
+        for &i in &frontier {
+            let (x, y) = ((i % rw) as i64, (i / rw) as i64);
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= rw as i64 || ny >= rh as i64 {
+                        continue;
+                    }
+                    let j = ny as usize * rw + nx as usize;
+                    if win[j] == 0 {
+                        win[j] = 2;
+                        veff[j] = f32::NEG_INFINITY;
+                        next.push(j);
+                    }
+                }
+            }
+        }
+        // Effective values of the new ring from the previous ring.
+        for &j in &next {
+            let (x, y) = ((j % rw) as i64, (j / rw) as i64);
+            let mut inner = f32::NEG_INFINITY;
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= rw as i64 || ny >= rh as i64 {
+                        continue;
+                    }
+                    let k = ny as usize * rw + nx as usize;
+                    if win[k] == 1 {
+                        inner = inner.max(veff[k]);
+                    }
+                }
+            }
+            veff[j] = v[j].min(inner);
+        }
+        for &j in &next {
+            win[j] = 1;
+        }
+        frontier = next;
+    }
+
+    // Coverage levels. hi: the tip's rim level, a low percentile of the
+    // pixels at least 2 px inside the mask (the dome above it saturates).
+    // lo: per angular sector around the blob, a low percentile of the
+    // window pixels outside the mask, so a tip sitting off-centre in its
+    // clearance hole (dark gap on one side, housing on the other) is
+    // measured against the level actually beside each stretch of its rim.
+    let mut interior: Vec<f32> = Vec::new();
+    for y in 2..rh.saturating_sub(2) {
+        for x in 2..rw.saturating_sub(2) {
+            let i = y * rw + x;
+            if mask[i] != 0
+                && mask[i - 2] != 0
+                && mask[i + 2] != 0
+                && mask[i - 2 * rw] != 0
+                && mask[i + 2 * rw] != 0
+                && mask[i - rw - 1] != 0
+                && mask[i - rw + 1] != 0
+                && mask[i + rw - 1] != 0
+                && mask[i + rw + 1] != 0
+            {
+                interior.push(v[i]);
+            }
+        }
+    }
+    let hi = if interior.len() >= 4 {
+        percentile(&mut interior, 0.1)
+    } else {
+        hi
+    };
+    const SECTORS: usize = 16;
+    let sector_of = |x: usize, y: usize| -> usize {
+        let d = diamond_angle((y as f64 - b.cy) as f32, (x as f64 - b.cx) as f32);
+        ((d * (SECTORS / 4) as f32) as usize).min(SECTORS - 1)
+    };
+    let mut outside: Vec<Vec<f32>> = vec![Vec::new(); SECTORS];
+    for y in 0..rh {
+        for x in 0..rw {
+            let i = y * rw + x;
+            if win[i] != 0 && mask[i] == 0 {
+                outside[sector_of(x, y)].push(veff[i]);
+            }
+        }
+    }
+    let lo_s: Vec<f32> = outside
+        .iter_mut()
+        .map(|o| {
+            if o.len() >= 3 {
+                percentile(o, 0.1).min(lo0)
+            } else {
+                lo0
+            }
+        })
+        .collect();
+    let lo = lo0;
+    let weight = |i: usize, x: usize, y: usize| -> f64 {
+        if mask[i] != 0 && v[i] >= hi {
+            return 1.0;
+        }
+        let l = lo_s[sector_of(x, y)];
+        ((veff[i] - l) / (hi - l).max(1e-6)).clamp(0.0, 1.0) as f64
+    };
+    let (mut sw, mut swx, mut swy) = (0f64, 0f64, 0f64);
+    let mut area = 0f64;
+    for y in 0..rh {
+        for x in 0..rw {
+            let i = y * rw + x;
+            if win[i] != 0 {
+                let wgt = weight(i, x, y);
+                area += wgt;
+                if loc == Localiser::Coverage {
+                    sw += wgt;
+                    swx += wgt * x as f64;
+                    swy += wgt * y as f64;
+                }
+            }
+        }
+    }
+    match loc {
+        Localiser::Centroid => {
+            sw = n;
+            swx = b.cx * n;
+            swy = b.cy * n;
+        }
+        Localiser::Weighted => {
+            for y in 0..rh {
+                for x in 0..rw {
+                    let i = y * rw + x;
+                    if mask[i] != 0 {
+                        let wgt = (v[i] - thr) as f64;
+                        if wgt > 0.0 {
+                            sw += wgt;
+                            swx += wgt * x as f64;
+                            swy += wgt * y as f64;
+                        }
+                    }
+                }
+            }
+        }
+        Localiser::Coverage => {}
+    }
+    if !(sw > 0.0) {
+        return None;
+    }
+    Some(BlobMeasure {
+        x: roi.x0 as f64 + swx / sw,
+        y: roi.y0 as f64 + swy / sw,
+        area_px: area,
+        lo,
+        hi,
+        peak,
+        threshold: thr,
+        elongation,
+        mask_px: b.area as usize,
+        touches_border,
+    })
+}

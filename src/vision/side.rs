@@ -1,0 +1,714 @@
+//! Side view: a back-lit silhouette across the pin row. The housing is a
+//! dark block at the bottom, pins are dark bars standing on it.
+//!
+//! Pipeline: coarse block-mean image → Otsu threshold → per column the
+//! longest silhouette run; its top is the housing edge where no pin stands
+//! (pins reach higher), so a RANSAC line through the run tops finds the
+//! edge → sub-pixel edge points at full resolution (half-level crossing of
+//! each column's profile between backlight and housing) and a robust line
+//! → bars above the edge: axis from per-row coverage centroids, tip from
+//! the half-level crossing along the axis, height = perpendicular distance
+//! from the tip to the edge → pins placed along the row by a 1-D lattice
+//! and a robust offset (and scale) fit, the housing block's centre
+//! deciding when pins alone cannot → missing / bent / short / high, and
+//! extras (anything dark above the housing that is not a pin).
+
+use super::InspectOptions;
+use super::detect;
+use super::error::VisionError;
+use super::fit::{self, Similarity};
+use super::gray::{Coarse, ImageInfo, Plane, Px};
+use super::grid;
+use super::label;
+use super::measure::{self, Localiser, Roi};
+use super::recipe::{Polarity, Recipe};
+use super::result::*;
+use super::top::check_contrast;
+
+/// A bar (pin candidate) measured at full resolution.
+#[derive(Debug, Clone)]
+struct Bar {
+    tip: (f64, f64),
+    /// Median silhouette width across the bar, px.
+    width_px: f64,
+    /// Along-row coordinate of the tip (projection on the edge direction), px.
+    u_px: f64,
+    height_px: f64,
+}
+
+/// Half-level crossing in a profile: first index pair (from the start)
+/// where the profile passes `level` going up; returns the fractional index.
+fn first_rise(prof: &[f32], level: f32) -> Option<f64> {
+    for i in 1..prof.len() {
+        if prof[i - 1] < level && prof[i] >= level {
+            let f = (level - prof[i - 1]) / (prof[i] - prof[i - 1]);
+            return Some((i - 1) as f64 + f as f64);
+        }
+    }
+    None
+}
+
+fn median_f32(v: &mut [f32]) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let m = v.len() / 2;
+    *v.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
+}
+
+/// The two half-level edge crossings of a bar in a row profile (sign space:
+/// bar high): each edge is placed halfway between the bar's interior level
+/// and the background level on its own side, so uneven backlight does not
+/// shift the centre. Returns fractional indices (left, right).
+fn bar_edges(prof: &[f32]) -> Option<(f64, f64)> {
+    let n = prof.len();
+    if n < 12 {
+        return None;
+    }
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &v in prof {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    let mid = 0.5 * (lo + hi);
+    let l0 = prof.iter().position(|&v| v >= mid)?;
+    let r0 = n - 1 - prof.iter().rev().position(|&v| v >= mid)?;
+    if r0 < l0 + 4 || l0 < 5 || r0 + 5 >= n {
+        return None;
+    }
+    let mut inner: Vec<f32> = prof[l0 + 2..=r0 - 2].to_vec();
+    let level_in = median_f32(&mut inner);
+    let mut left: Vec<f32> = prof[l0.saturating_sub(7)..l0 - 2].to_vec();
+    let mut right: Vec<f32> = prof[r0 + 3..(r0 + 8).min(n)].to_vec();
+    let (bl, br) = (median_f32(&mut left), median_f32(&mut right));
+    let half_l = 0.5 * (bl + level_in);
+    let half_r = 0.5 * (br + level_in);
+    // Left: last rise through half_l before the interior.
+    let mut xl = None;
+    for i in (1..=l0 + 1).rev() {
+        if prof[i - 1] < half_l && prof[i] >= half_l {
+            xl = Some((i - 1) as f64 + ((half_l - prof[i - 1]) / (prof[i] - prof[i - 1])) as f64);
+            break;
+        }
+    }
+    let mut xr = None;
+    for i in r0.saturating_sub(1)..n - 1 {
+        if prof[i] >= half_r && prof[i + 1] < half_r {
+            xr = Some(i as f64 + ((prof[i] - half_r) / (prof[i] - prof[i + 1])) as f64);
+            break;
+        }
+    }
+    Some((xl?, xr?))
+}
+
+/// Robust 1-D fit u = a + b·n (n nominal mm, u measured px) with `b` fixed
+/// when the scale is known; Tukey IRLS with MAD scale floored at `floor`.
+fn robust_offset_scale(
+    n: &[f64],
+    u: &[f64],
+    fixed_b: Option<f64>,
+    floor: f64,
+) -> Option<(f64, f64, Vec<bool>, f64)> {
+    let k = n.len();
+    if k == 0 || (fixed_b.is_none() && k < 2) {
+        return None;
+    }
+    let solve = |w: &[f64]| -> Option<(f64, f64)> {
+        let sw: f64 = w.iter().sum();
+        if !(sw > 0.0) {
+            return None;
+        }
+        match fixed_b {
+            Some(b) => {
+                let a = n
+                    .iter()
+                    .zip(u)
+                    .zip(w)
+                    .map(|((n, u), w)| w * (u - b * n))
+                    .sum::<f64>()
+                    / sw;
+                Some((a, b))
+            }
+            None => {
+                let mn = n.iter().zip(w).map(|(n, w)| w * n).sum::<f64>() / sw;
+                let mu = u.iter().zip(w).map(|(u, w)| w * u).sum::<f64>() / sw;
+                let (mut snn, mut snu) = (0.0, 0.0);
+                for ((n, u), w) in n.iter().zip(u).zip(w) {
+                    snn += w * (n - mn) * (n - mn);
+                    snu += w * (n - mn) * (u - mu);
+                }
+                if snn <= 1e-12 {
+                    return None;
+                }
+                let b = snu / snn;
+                Some((mu - b * mn, b))
+            }
+        }
+    };
+    // Start from the median offset (or the plain fit).
+    let (mut a, mut b) = match fixed_b {
+        Some(b) => {
+            let mut d: Vec<f64> = n.iter().zip(u).map(|(n, u)| u - b * n).collect();
+            (grid::median(&mut d)?, b)
+        }
+        None => solve(&vec![1.0; k])?,
+    };
+    let mut sigma = floor;
+    for _ in 0..10 {
+        let r: Vec<f64> = n
+            .iter()
+            .zip(u)
+            .map(|(n, u)| (u - a - b * n).abs())
+            .collect();
+        let mut rr = r.clone();
+        sigma = (1.4826 * grid::median(&mut rr).unwrap_or(0.0)).max(floor);
+        let c = 4.685 * sigma;
+        let w: Vec<f64> = r
+            .iter()
+            .map(|ri| {
+                let t = ri / c;
+                if t < 1.0 { (1.0 - t * t).powi(2) } else { 0.0 }
+            })
+            .collect();
+        match solve(&w) {
+            Some((na, nb)) => {
+                let moved = (na - a).abs() + (nb - b).abs();
+                a = na;
+                b = nb;
+                if moved < 1e-9 {
+                    break;
+                }
+            }
+            None => break,
+        }
+    }
+    let c = 4.685 * sigma;
+    let inl: Vec<bool> = n
+        .iter()
+        .zip(u)
+        .map(|(n, u)| (u - a - b * n).abs() < c)
+        .collect();
+    let w: Vec<f64> = inl.iter().map(|&x| if x { 1.0 } else { 0.0 }).collect();
+    if let Some((na, nb)) = solve(&w) {
+        a = na;
+        b = nb;
+    }
+    let (mut ss, mut m) = (0.0, 0);
+    for ((n, u), &i) in n.iter().zip(u).zip(&inl) {
+        if i {
+            ss += (u - a - b * n).powi(2);
+            m += 1;
+        }
+    }
+    Some((
+        a,
+        b,
+        inl,
+        if m > 0 {
+            (ss / m as f64).sqrt()
+        } else {
+            f64::NAN
+        },
+    ))
+}
+
+/// Inspects one side-view image.
+pub fn inspect_side<P: Px>(
+    recipe: &Recipe,
+    plane: &Plane<P>,
+    info: ImageInfo,
+    full_scale: f32,
+    opts: &InspectOptions,
+) -> Result<Inspection, VisionError> {
+    let _ = opts;
+    let part = recipe.part_number.clone();
+    let mut warnings = Vec::new();
+    // Silhouette is bright in `sign` space.
+    let sign = match recipe.polarity {
+        Polarity::Dark => -1.0,
+        Polarity::Bright => 1.0,
+    };
+    let pin_px_prior = recipe
+        .mm_per_px
+        .map(|m| recipe.pin_mm / m)
+        .unwrap_or((plane.w.max(plane.h) as f64) / 45.0);
+    let k = detect::coarse_factor(pin_px_prior);
+    let coarse = Coarse::build(plane, k, sign);
+    check_contrast(&coarse, full_scale)?;
+    let (cw, ch) = (coarse.w, coarse.h);
+    let t = detect::otsu(&coarse.data, cw, ch);
+    let (r_lo, r_hi) = detect::robust_range(&coarse.data);
+    let contrast = r_hi - r_lo;
+    let fg = |x: usize, y: usize| coarse.at(x, y) > t;
+
+    // 1. Housing edge, coarse: top of the longest silhouette run per column.
+    let min_run = (ch / 10).max(3);
+    let mut tops: Vec<(f64, f64)> = Vec::new();
+    for x in 0..cw {
+        let (mut best, mut best_start, mut run, mut start) = (0usize, 0usize, 0usize, 0usize);
+        for y in 0..ch {
+            if fg(x, y) {
+                if run == 0 {
+                    start = y;
+                }
+                run += 1;
+                if run > best {
+                    best = run;
+                    best_start = start;
+                }
+            } else {
+                run = 0;
+            }
+        }
+        if best >= min_run {
+            tops.push((x as f64, best_start as f64));
+        }
+    }
+    let no_housing =
+        |msg: &str| VisionError::NoHousing(format!("{msg} (recipe {part}, side view)"));
+    if tops.len() < 8 {
+        return Err(no_housing(
+            "no dark block along the image: is this a side view?",
+        ));
+    }
+    let coarse_line =
+        fit::robust_line(&tops, 1.5).ok_or_else(|| no_housing("no straight top edge"))?;
+    let inl_cols: Vec<usize> = tops
+        .iter()
+        .zip(&coarse_line.inlier)
+        .filter(|(_, i)| **i)
+        .map(|(p, _)| p.0 as usize)
+        .collect();
+    if inl_cols.len() < 6 {
+        return Err(no_housing("too few columns on the housing's top edge"));
+    }
+    let tilt = coarse_line.line.b.atan().to_degrees();
+    if tilt.abs() > grid::MAX_TILT_DEG {
+        return Err(VisionError::WrongPart {
+            part,
+            msg: format!("housing edge tilted {tilt:.1}°: not a side view of this part?"),
+        });
+    }
+    let (hx0_c, hx1_c) = (
+        *inl_cols.iter().min().unwrap_or(&0),
+        *inl_cols.iter().max().unwrap_or(&0),
+    );
+    let mut col_is_edge = vec![false; cw];
+    for &c in &inl_cols {
+        col_is_edge[c] = true;
+    }
+
+    // 2. Pins and dust: silhouette above the edge.
+    let edge_c = |x: f64| coarse_line.line.y_at(x);
+    let lab = label::label(cw, ch, |x, y| {
+        fg(x, y) && (y as f64) < edge_c(x as f64) - 1.5
+    });
+    let mut bar_blobs = Vec::new();
+    let mut dust_blobs = Vec::new();
+    for b in &lab.blobs {
+        let touches = (b.x_min..=b.x_max).any(|x| b.y_max as f64 >= edge_c(x as f64) - 3.5);
+        if touches && (b.height() as f64) >= 2.0 * (b.width() as f64).min(pin_px_prior / k as f64) {
+            bar_blobs.push(b.clone());
+        } else {
+            dust_blobs.push(b.clone());
+        }
+    }
+
+    // 3. Sub-pixel housing edge: half-level crossings in columns clear of bars.
+    let kf = k as f64;
+    let near_bar = |xf: f64| {
+        bar_blobs.iter().any(|b| {
+            xf >= (b.x_min as f64 - 1.0) * kf - 2.0 && xf <= (b.x_max as f64 + 2.0) * kf + 2.0
+        })
+    };
+    let half = (3 * k + 4) as i64;
+    let mut edge_pts = Vec::new();
+    let x_lo = (hx0_c + 1) * k;
+    let x_hi = hx1_c.saturating_sub(1) * k;
+    let step = (k / 2).max(1);
+    let mut xi = x_lo;
+    while xi < x_hi.min(plane.w) {
+        let xf = xi as f64;
+        let c = (xi / k).min(cw - 1);
+        if col_is_edge[c] && !near_bar(xf) {
+            let (_, yc) = coarse.to_full(0.0, edge_c(c as f64));
+            let y0 = (yc.round() as i64 - half).max(0) as usize;
+            let y1 = ((yc.round() as i64 + half) as usize).min(plane.h - 1);
+            if y1 > y0 + 6 {
+                let prof: Vec<f32> = (y0..=y1).map(|y| sign * plane.at(xi, y)).collect();
+                let mut top: Vec<f32> = prof[..3].to_vec();
+                let mut bot: Vec<f32> = prof[prof.len() - 3..].to_vec();
+                let (lo, hi) = (median_f32(&mut top), median_f32(&mut bot));
+                if hi - lo > 0.3 * contrast {
+                    if let Some(f) = first_rise(&prof, 0.5 * (lo + hi)) {
+                        edge_pts.push((xf, y0 as f64 + f));
+                    }
+                }
+            }
+        }
+        xi += step;
+    }
+    let edge = fit::robust_line(&edge_pts, 1.0)
+        .ok_or_else(|| no_housing("top edge not measurable between the pins"))?;
+    let line = edge.line;
+    let phi = line.b.atan();
+    let (sn, cs) = phi.sin_cos();
+
+    // 4. Bars at full resolution: axis and tip.
+    let mut bars = Vec::new();
+    for b in &bar_blobs {
+        let x0f = b.x_min as f64 * kf;
+        let x1f = (b.x_max as f64 + 1.0) * kf - 1.0;
+        let margin = (0.5 * pin_px_prior).max(4.0);
+        let xa = (x0f - margin).max(0.0) as usize;
+        let xb = ((x1f + margin) as usize).min(plane.w - 1);
+        let tip_guess = b.y_min as f64 * kf;
+        let xm = 0.5 * (x0f + x1f);
+        let base = line.y_at(xm);
+        let len = base - tip_guess;
+        if len < 4.0 || xb <= xa + 4 {
+            continue;
+        }
+        // Per-row coverage centroid across the bar, over its middle part.
+        let ya = (tip_guess + 0.3 * len).round() as usize;
+        let yb = (base - 0.15 * len).round().max(ya as f64 + 1.0) as usize;
+        let (mut ys, mut xs, mut widths) = (Vec::new(), Vec::new(), Vec::new());
+        for y in ya..yb.min(plane.h) {
+            let prof: Vec<f32> = (xa..=xb).map(|x| sign * plane.at(x, y)).collect();
+            if let Some((l, r)) = bar_edges(&prof) {
+                ys.push(y as f64);
+                xs.push(xa as f64 + 0.5 * (l + r));
+                widths.push((r - l) as f32);
+            }
+        }
+        if ys.len() < 3 {
+            continue;
+        }
+        // Axis: perpendicular to the housing edge (dx/dy = −b) through the
+        // mean centre, unless the free fit shows a clear lean (a pin bent
+        // sideways), in which case the free line is used.
+        let pts: Vec<(f64, f64)> = ys.iter().zip(&xs).map(|(y, x)| (*y, *x)).collect();
+        let my = ys.iter().sum::<f64>() / ys.len() as f64;
+        let mx = xs.iter().sum::<f64>() / xs.len() as f64;
+        let perp = fit::Line {
+            a: mx + line.b * my,
+            b: -line.b,
+        };
+        let axis = match fit::robust_line(&pts, 0.5) {
+            Some(f) if (f.line.b - perp.b).abs() * (yb - ya) as f64 > 1.5 => f.line,
+            _ => perp,
+        };
+        let width_px = median_f32(&mut widths) as f64;
+        // Tip: half-level crossing along the axis, averaged over ±2 px.
+        let t0 = tip_guess - 2.0 * kf - 4.0;
+        let t1 = tip_guess + 2.0 * kf + 4.0;
+        let n = ((t1 - t0) / 0.25) as usize;
+        let prof: Vec<f32> = (0..=n)
+            .map(|i| {
+                let y = t0 + i as f64 * 0.25;
+                let x = axis.y_at(y);
+                let mut s = 0.0;
+                for d in -2..=2 {
+                    s += sign * plane.bilinear(x + d as f64, y);
+                }
+                s / 5.0
+            })
+            .collect();
+        let m = prof.len();
+        let mut top: Vec<f32> = prof[..8].to_vec();
+        let mut bot: Vec<f32> = prof[m - 8..].to_vec();
+        let (lo, hi) = (median_f32(&mut top), median_f32(&mut bot));
+        let Some(f) = first_rise(&prof, 0.5 * (lo + hi)) else {
+            continue;
+        };
+        let ty = t0 + f * 0.25;
+        let tip = (axis.y_at(ty), ty);
+        bars.push(Bar {
+            tip,
+            width_px,
+            u_px: cs * tip.0 + sn * tip.1,
+            height_px: line.height_above(tip.0, tip.1),
+        });
+    }
+    if bars.is_empty() {
+        return Err(VisionError::NoPins {
+            part,
+            msg: "no pin standing on the housing".into(),
+        });
+    }
+
+    // 5. Along-row placement: 1-D lattice, housing anchor, robust fit.
+    let pitch_mm = recipe.pitch_mm[0];
+    let fixed_s = recipe.mm_per_px.map(|m| 1.0 / m);
+    let pitch_px = match fixed_s {
+        Some(s) => pitch_mm * s,
+        None => {
+            let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+            u.sort_by(|a, b| a.total_cmp(b));
+            let mut d: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
+            grid::median(&mut d).ok_or_else(|| VisionError::NoPins {
+                part: part.clone(),
+                msg: "cannot estimate mm_per_px from fewer than two pins".into(),
+            })?
+        }
+    };
+    // Reject the wrong part: bars at a spacing unlike the recipe's.
+    if fixed_s.is_some() && bars.len() >= 3 {
+        let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+        u.sort_by(|a, b| a.total_cmp(b));
+        let mut d: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
+        if let Some(md) = grid::median(&mut d) {
+            let ratio = md / pitch_px;
+            if (ratio - ratio.round()).abs() > 0.2 || ratio < 0.8 {
+                return Err(VisionError::WrongPart {
+                    part,
+                    msg: format!(
+                        "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
+                        recipe.mm_per_px.unwrap_or(f64::NAN)
+                    ),
+                });
+            }
+        }
+    }
+    let u_ref = bars[0].u_px;
+    let (mut cph, mut sph) = (0.0, 0.0);
+    for b in &bars {
+        let a = (b.u_px - u_ref) / pitch_px;
+        cph += (2.0 * std::f64::consts::PI * a).cos();
+        sph += (2.0 * std::f64::consts::PI * a).sin();
+    }
+    let phase = sph.atan2(cph) / (2.0 * std::f64::consts::PI);
+    let lat_a = |u: f64| (u - u_ref) / pitch_px - phase;
+    let idx: Vec<Option<i64>> = bars
+        .iter()
+        .map(|b| {
+            let a = lat_a(b.u_px);
+            ((a - a.round()).abs() < 0.3).then_some(a.round() as i64)
+        })
+        .collect();
+    let members: Vec<(i64, i64)> = idx.iter().flatten().map(|&a| (a, 0)).collect();
+    // Housing block ends along the row (coarse extent refined to the line).
+    let (hx0, hx1) = (hx0_c as f64 * kf, (hx1_c as f64 + 1.0) * kf - 1.0);
+    let u_h0 = cs * hx0 + sn * line.y_at(hx0);
+    let u_h1 = cs * hx1 + sn * line.y_at(hx1);
+    let anchor = Some((lat_a(0.5 * (u_h0 + u_h1)), 0.0));
+    let skipped = |r: u32, c: u32| recipe.is_skipped(r, c);
+    let placement =
+        grid::place_window(&members, 1, recipe.cols, &skipped, anchor).ok_or_else(|| {
+            VisionError::NoPins {
+                part: part.clone(),
+                msg: "no pins on a common pitch".into(),
+            }
+        })?;
+    let col_of = |a: i64| -> Option<u32> {
+        let c = a - placement.col0;
+        (c >= 0 && c < recipe.cols as i64 && !recipe.is_skipped(0, c as u32)).then_some(c as u32)
+    };
+    let outside = idx
+        .iter()
+        .flatten()
+        .filter(|&&a| col_of(a).is_none())
+        .count();
+    if outside >= 2 && outside * 4 >= placement.score {
+        return Err(VisionError::WrongPart {
+            part,
+            msg: format!(
+                "{outside} pins stand outside the recipe's {} positions ({} inside): a different part?",
+                recipe.cols, placement.score
+            ),
+        });
+    }
+    if placement.ambiguous {
+        warnings.push("pins alone do not place the grid (an end pin missing): the housing block's centre decided".into());
+    }
+    let (mut nn, mut uu) = (Vec::new(), Vec::new());
+    for (b, i) in bars.iter().zip(&idx) {
+        if let Some(c) = i.and_then(col_of) {
+            nn.push(recipe.nominal_uv_mm(0, c).0);
+            uu.push(b.u_px);
+        }
+    }
+    let (a_u, s, inl, rms) =
+        robust_offset_scale(&nn, &uu, fixed_s, 0.1).ok_or_else(|| VisionError::NoPins {
+            part: part.clone(),
+            msg: "cannot fit the pin row (need two pins to estimate mm_per_px)".into(),
+        })?;
+    let mm_per_px = 1.0 / s;
+    if fixed_s.is_none() {
+        warnings.push(format!(
+            "mm_per_px estimated from the pitch: {mm_per_px:.5}"
+        ));
+    }
+    // Part frame: origin on the edge line at along-row coordinate a_u.
+    // The edge line's points satisfy −sn·x + cs·y = c_e.
+    let c_e = -sn * 0.0 + cs * line.a;
+    let (ox, oy) = (cs * a_u - sn * c_e, sn * a_u + cs * c_e);
+    let sim = Similarity {
+        s,
+        theta: phi,
+        tx: ox,
+        ty: oy,
+    };
+
+    // 6. Per position.
+    let tol = &recipe.tolerance;
+    let h_nom = tol.height_mm.unwrap_or(0.0);
+    let h_tol = tol.height_tol_mm.unwrap_or(f64::INFINITY);
+    let positions = recipe.positions();
+    let mut used = vec![false; bars.len()];
+    let mut pins = Vec::with_capacity(positions.len());
+    for &(row, col) in &positions {
+        let u_nom = recipe.nominal_uv_mm(row, col).0;
+        let (nx, ny) = sim.apply(u_nom, -h_nom);
+        let u_nom_px = a_u + s * u_nom;
+        let best = bars
+            .iter()
+            .enumerate()
+            .filter(|(i, b)| !used[*i] && (b.u_px - u_nom_px).abs() < 0.4 * pitch_px)
+            .min_by(|a, b| {
+                (a.1.u_px - u_nom_px)
+                    .abs()
+                    .total_cmp(&(b.1.u_px - u_nom_px).abs())
+            });
+        let mut pr = PinResult {
+            row,
+            col,
+            status: PinStatus::Missing,
+            nominal_x_px: nx,
+            nominal_y_px: ny,
+            x_px: None,
+            y_px: None,
+            dx_mm: None,
+            dy_mm: None,
+            offset_mm: None,
+            area_ratio: None,
+            height_mm: None,
+            width_ratio: None,
+            elongation: None,
+        };
+        if let Some((i, b)) = best {
+            used[i] = true;
+            let du = (b.u_px - u_nom_px) * mm_per_px;
+            let h = b.height_px * mm_per_px;
+            pr.x_px = Some(b.tip.0);
+            pr.y_px = Some(b.tip.1);
+            pr.dx_mm = Some(du);
+            pr.offset_mm = Some(du.abs());
+            pr.height_mm = Some(h);
+            pr.width_ratio = Some(b.width_px * mm_per_px / recipe.pin_mm);
+            pr.status = if du.abs() > tol.position_mm {
+                PinStatus::Bent
+            } else if h < h_nom - h_tol {
+                PinStatus::Short
+            } else if h > h_nom + h_tol {
+                PinStatus::High
+            } else {
+                PinStatus::Ok
+            };
+        }
+        pins.push(pr);
+    }
+
+    // 7. Extras: dust and unassigned bars above the housing.
+    let tip_px = recipe.pin_mm * recipe.pin_mm * s * s;
+    let rule = &recipe.extras;
+    let mut extras = Vec::new();
+    let mut ignored = Vec::new();
+    for (i, b) in bars.iter().enumerate() {
+        if !used[i] {
+            extras.push(ExtraResult {
+                x_px: b.tip.0,
+                y_px: b.tip.1,
+                area_ratio: b.width_px * b.height_px / tip_px,
+                distance_mm: None,
+                ignored_because: None,
+            });
+        }
+    }
+    let dilate = ((0.12 * pin_px_prior).round() as usize).max(2);
+    for d in &dust_blobs {
+        let roi = Roi::around(
+            d.x_min as f64 * kf,
+            d.y_min as f64 * kf,
+            (d.x_max as f64 + 1.0) * kf - 1.0,
+            (d.y_max as f64 + 1.0) * kf - 1.0,
+            (0.45 * pin_px_prior).max(4.0),
+            plane.w,
+            plane.h,
+        );
+        let seed = coarse.to_full(d.cx, d.cy);
+        let Some(m) = measure::measure_blob(plane, sign, roi, seed, Localiser::Coverage, dilate)
+        else {
+            continue;
+        };
+        let ar = m.area_px / tip_px;
+        let e = ExtraResult {
+            x_px: m.x,
+            y_px: m.y,
+            area_ratio: ar,
+            distance_mm: None,
+            ignored_because: None,
+        };
+        if ar >= rule.min_area_ratio {
+            extras.push(e);
+        } else if ar >= 0.5 * rule.min_area_ratio {
+            ignored.push(ExtraResult {
+                ignored_because: Some(format!(
+                    "area {:.2} of a tip, below {}",
+                    ar, rule.min_area_ratio
+                )),
+                ..e
+            });
+        }
+    }
+
+    let (hu0, hu1) = ((u_h0 - a_u) * mm_per_px, (u_h1 - a_u) * mm_per_px);
+    let depth_mm = (plane.h as f64 - line.y_at(0.5 * (hx0 + hx1))).max(0.0) * mm_per_px;
+    let housing = Housing {
+        corners_px: [
+            sim.apply(hu0, 0.0),
+            sim.apply(hu1, 0.0),
+            sim.apply(hu1, depth_mm),
+            sim.apply(hu0, depth_mm),
+        ],
+        extent_mm: [hu0, hu1, 0.0, depth_mm],
+        edge: Some(EdgeLine {
+            a: line.a,
+            b: line.b,
+            rms_px: edge.rms,
+            points: edge.inlier.iter().filter(|b| **b).count(),
+        }),
+    };
+    let mut ins = Inspection {
+        part_number: recipe.part_number.clone(),
+        view: recipe.view,
+        verdict: Verdict::Fail,
+        tolerance: super::recipe::Tolerance {
+            tip_area: if recipe.view == super::recipe::View::Top {
+                Some(recipe.tip_area())
+            } else {
+                None
+            },
+            ..recipe.tolerance.clone()
+        },
+        image: info,
+        grid: GridFit {
+            transform: sim,
+            centre_px: (ox, oy),
+            rotation_deg: phi.to_degrees(),
+            mm_per_px,
+            mm_per_px_estimated: fixed_s.is_none(),
+            fit_inliers: inl.iter().filter(|b| **b).count(),
+            fit_rms_px: rms,
+            anchored_by_housing: placement.ambiguous,
+        },
+        housing: Some(housing),
+        pins,
+        extras,
+        ignored,
+        counts: StatusCounts::default(),
+        warnings,
+    };
+    ins.finish();
+    Ok(ins)
+}

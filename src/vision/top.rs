@@ -1,0 +1,606 @@
+//! Top view: pin tips seen down the insertion axis.
+//!
+//! Pipeline: coarse search ([`super::detect`]) → sub-pixel measurement of
+//! every blob at full resolution ([`super::measure`]) → lattice by medians
+//! ([`super::grid`]) → housing outline by edge profiles along the lattice
+//! axes (anchors the grid when pins alone cannot, bounds where extras count)
+//! → robust similarity fit ([`super::fit`]) → assignment of blobs to grid
+//! positions → verdicts (missing, damaged, bent) and extras.
+
+use super::InspectOptions;
+use super::detect::{self, CoarseSearch};
+use super::error::VisionError;
+use super::fit::{self, Similarity};
+use super::gray::{Coarse, ImageInfo, Plane, Px};
+use super::grid::{self, Lattice, LatticeError};
+use super::measure::{self, BlobMeasure, Roi};
+use super::recipe::{PinShape, Polarity, Recipe};
+use super::result::*;
+
+/// A measured blob and what it looks like.
+#[derive(Debug, Clone)]
+pub(crate) struct Candidate {
+    pub m: BlobMeasure,
+    pub pinlike: bool,
+}
+
+/// Minimum contrast (fraction of full scale) below which an image is blank.
+pub(crate) const MIN_CONTRAST: f32 = 0.012;
+
+pub(crate) fn check_contrast(coarse: &Coarse, full_scale: f32) -> Result<(), VisionError> {
+    let (lo, hi) = detect::robust_range(&coarse.data);
+    let (a, b) = (lo.abs().min(hi.abs()), lo.abs().max(hi.abs()));
+    if !(hi - lo >= MIN_CONTRAST * full_scale) {
+        return Err(VisionError::NoContrast {
+            lo: a.round(),
+            hi: b.round(),
+        });
+    }
+    Ok(())
+}
+
+/// Equivalent width of a tip of area `a` px².
+fn width_from_area(a: f64, shape: PinShape) -> f64 {
+    match shape {
+        PinShape::Square => a.sqrt(),
+        PinShape::Round => (4.0 * a / std::f64::consts::PI).sqrt(),
+    }
+}
+
+/// Without `mm_per_px`: the tip width in pixels, from the most common blob
+/// size on a top-hat with a window of 1/6 of the image.
+fn estimate_pin_px<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    recipe: &Recipe,
+    full_scale: f32,
+) -> Result<f64, VisionError> {
+    let k = (plane.w.max(plane.h) / 400).clamp(1, 6);
+    let coarse = Coarse::build(plane, k, sign);
+    check_contrast(&coarse, full_scale)?;
+    let r = coarse.w.max(coarse.h) / 12;
+    let th = super::morph::white_top_hat(&coarse.data, coarse.w, coarse.h, r);
+    let t = detect::otsu(&th, coarse.w, coarse.h);
+    let lab = super::label::label(coarse.w, coarse.h, |x, y| th[y * coarse.w + x] > t);
+    let mut areas: Vec<f64> = lab
+        .blobs
+        .iter()
+        .filter(|b| {
+            b.area >= 4 && (b.width().max(b.height()) as f64) < 3.0 * (b.area as f64).sqrt() + 2.0
+        })
+        .map(|b| b.area as f64)
+        .collect();
+    if areas.is_empty() {
+        return Err(VisionError::NoPins {
+            part: recipe.part_number.clone(),
+            msg: "no tip-sized blobs to estimate the scale from (mm_per_px absent)".into(),
+        });
+    }
+    areas.sort_by(|a, b| a.total_cmp(b));
+    let n = recipe.positions().len().min(areas.len()).max(1);
+    let mut best = (f64::INFINITY, 0usize);
+    for i in 0..=(areas.len() - n) {
+        let ratio = areas[i + n - 1] / areas[i];
+        if ratio < best.0 {
+            best = (ratio, i);
+        }
+    }
+    let med = areas[best.1 + n / 2];
+    Ok(width_from_area(med, recipe.pin_shape) * k as f64)
+}
+
+/// Full-resolution measurement of every coarse blob.
+fn measure_candidates<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    cs: &CoarseSearch,
+    pin_px: f64,
+    opts: &InspectOptions,
+) -> Vec<BlobMeasure> {
+    let k = cs.coarse.k as f64;
+    let margin = (0.45 * pin_px).max(4.0);
+    let dilate = ((0.12 * pin_px).round() as usize).max(2);
+    let mut out: Vec<BlobMeasure> = Vec::with_capacity(cs.blobs.len());
+    for cb in &cs.blobs {
+        let b = &cb.blob;
+        let roi = Roi::around(
+            b.x_min as f64 * k,
+            b.y_min as f64 * k,
+            (b.x_max as f64 + 1.0) * k - 1.0,
+            (b.y_max as f64 + 1.0) * k - 1.0,
+            margin,
+            plane.w,
+            plane.h,
+        );
+        let seed = cs.coarse.to_full(b.cx, b.cy);
+        if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate) {
+            out.push(m);
+        }
+    }
+    // Two coarse blobs can resolve to one blob at full resolution.
+    out.sort_by(|a, b| b.area_px.total_cmp(&a.area_px));
+    let mut kept: Vec<BlobMeasure> = Vec::with_capacity(out.len());
+    for m in out {
+        if kept
+            .iter()
+            .all(|q| (q.x - m.x).hypot(q.y - m.y) > 0.3 * pin_px)
+        {
+            kept.push(m);
+        }
+    }
+    kept
+}
+
+/// Housing edges in lattice units [a0, a1, b0, b1], from edge profiles
+/// along the lattice axes starting just outside the outermost pins.
+fn find_housing(
+    coarse: &Coarse,
+    lat: &Lattice,
+    a_span: (i64, i64),
+    b_span: (i64, i64),
+    pin_px: f64,
+    min_step: f32,
+) -> Option<[f64; 4]> {
+    let k = coarse.k as f64;
+    let sample = |a: f64, b: f64| {
+        let (x, y) = lat.to_image(a, b);
+        let (cx, cy) = coarse.from_full(x, y);
+        coarse.bilinear(cx, cy)
+    };
+    // Outermost strong step along a line (dir = +1/−1 along a or b).
+    let edge_along = |along_a: bool, fixed: f64, start: f64, dir: f64, pitch: f64| -> Option<f64> {
+        let step = 0.5 * k / pitch;
+        let len = 2.6;
+        let n = (len / step) as usize + 3;
+        let prof: Vec<f32> = (0..n)
+            .map(|i| {
+                let t = start + dir * i as f64 * step;
+                if along_a {
+                    sample(t, fixed)
+                } else {
+                    sample(fixed, t)
+                }
+            })
+            .collect();
+        let g: Vec<f32> = (1..n - 1)
+            .map(|i| (prof[i + 1] - prof[i - 1]).abs())
+            .collect();
+        let gmax = g.iter().cloned().fold(0f32, f32::max);
+        if gmax < min_step {
+            return None;
+        }
+        let i = g.iter().rposition(|&v| v >= 0.4 * gmax)?;
+        Some(start + dir * (i + 1) as f64 * step)
+    };
+    let half_pin_a = (0.5 * pin_px + 2.0) / lat.px;
+    let half_pin_b = (0.5 * pin_px + 2.0) / lat.py;
+    let off_a = 0.9 * pin_px / lat.px;
+    let off_b = 0.9 * pin_px / lat.py;
+    let mut b_lines: Vec<f64> = vec![b_span.0 as f64 - off_b, b_span.1 as f64 + off_b];
+    for b in b_span.0..b_span.1 {
+        b_lines.push(b as f64 + 0.5);
+    }
+    let mut a_lines: Vec<f64> = vec![a_span.0 as f64 - off_a, a_span.1 as f64 + off_a];
+    for a in a_span.0..a_span.1 {
+        a_lines.push(a as f64 + 0.5);
+    }
+    let side = |along_a: bool, lines: &[f64], start: f64, dir: f64, pitch: f64| -> Option<f64> {
+        let mut v: Vec<f64> = lines
+            .iter()
+            .filter_map(|&f| edge_along(along_a, f, start, dir, pitch))
+            .collect();
+        grid::median(&mut v)
+    };
+    let a1 = side(true, &b_lines, a_span.1 as f64 + half_pin_a, 1.0, lat.px)?;
+    let a0 = side(true, &b_lines, a_span.0 as f64 - half_pin_a, -1.0, lat.px)?;
+    let b1 = side(false, &a_lines, b_span.1 as f64 + half_pin_b, 1.0, lat.py)?;
+    let b0 = side(false, &a_lines, b_span.0 as f64 - half_pin_b, -1.0, lat.py)?;
+    Some([a0, a1, b0, b1])
+}
+
+/// Distance of (u, v) from the rectangle [u0, u1] × [v0, v1] (0 inside).
+pub(crate) fn rect_distance(u: f64, v: f64, r: [f64; 4]) -> f64 {
+    let du = (r[0] - u).max(u - r[1]).max(0.0);
+    let dv = (r[2] - v).max(v - r[3]).max(0.0);
+    du.hypot(dv)
+}
+
+/// Inspects one top-view image.
+pub fn inspect_top<P: Px>(
+    recipe: &Recipe,
+    plane: &Plane<P>,
+    info: ImageInfo,
+    full_scale: f32,
+    opts: &InspectOptions,
+) -> Result<Inspection, VisionError> {
+    let sign = match recipe.polarity {
+        Polarity::Bright => 1.0,
+        Polarity::Dark => -1.0,
+    };
+    let part = recipe.part_number.clone();
+    let mut warnings = Vec::new();
+    let pin_px0 = match recipe.mm_per_px {
+        Some(m) => recipe.pin_mm / m,
+        None => estimate_pin_px(plane, sign, recipe, full_scale)?,
+    };
+    let s0 = pin_px0 / recipe.pin_mm;
+    let cs = detect::coarse_search(plane, sign, pin_px0, None);
+    check_contrast(&cs.coarse, full_scale)?;
+    let blobs = measure_candidates(plane, sign, &cs, pin_px0, opts);
+    let tip_px0 = recipe.tip_area_mm2() * s0 * s0;
+    let cands: Vec<Candidate> = blobs
+        .into_iter()
+        .map(|m| {
+            let a = m.area_px / tip_px0;
+            let pinlike = (0.3..3.0).contains(&a) && m.elongation < 3.0 && !m.touches_border;
+            Candidate { m, pinlike }
+        })
+        .collect();
+    let pin_pts: Vec<(f64, f64)> = cands
+        .iter()
+        .filter(|c| c.pinlike)
+        .map(|c| (c.m.x, c.m.y))
+        .collect();
+    if pin_pts.is_empty() {
+        return Err(VisionError::NoPins {
+            part,
+            msg: format!(
+                "no tip-sized {} blob found (expected tips about {:.0} px wide; wrong recipe, view or polarity?)",
+                if sign > 0.0 { "bright" } else { "dark" },
+                pin_px0
+            ),
+        });
+    }
+    let (px_mm, py_mm) = (recipe.pitch_mm[0], recipe.pitch_mm[1]);
+    let pitch_px = recipe.mm_per_px.map(|_| (px_mm * s0, py_mm * s0));
+    let lat = match grid::estimate_lattice(
+        &pin_pts,
+        pitch_px,
+        py_mm / px_mm,
+        recipe.rows,
+        recipe.cols,
+    ) {
+        Ok(l) => l,
+        Err(LatticeError::NoPoints) => {
+            return Err(VisionError::NoPins {
+                part,
+                msg: "cannot estimate the pitch: no two pins side by side".into(),
+            });
+        }
+        Err(LatticeError::PitchMismatch {
+            expected_px,
+            found_px,
+        }) => {
+            return Err(VisionError::WrongPart {
+                part,
+                msg: format!(
+                    "pins are {found_px:.1} px apart, the recipe expects {expected_px:.1} px ({} mm at {} mm/px)",
+                    if recipe.cols > 1 { px_mm } else { py_mm },
+                    recipe.mm_per_px.unwrap_or(f64::NAN)
+                ),
+            });
+        }
+    };
+    // Lattice members (pin-like blobs on lattice nodes).
+    let idx: Vec<Option<grid::LatticeIndex>> = cands
+        .iter()
+        .map(|c| {
+            if c.pinlike {
+                grid::index_of(&lat, (c.m.x, c.m.y), 0.3)
+            } else {
+                None
+            }
+        })
+        .collect();
+    let members: Vec<(i64, i64)> = idx.iter().flatten().map(|i| (i.a, i.b)).collect();
+    if members.is_empty() {
+        return Err(VisionError::NoPins {
+            part,
+            msg: "no pins on a common grid".into(),
+        });
+    }
+    let a_span = (
+        members.iter().map(|m| m.0).min().unwrap_or(0),
+        members.iter().map(|m| m.0).max().unwrap_or(0),
+    );
+    let b_span = (
+        members.iter().map(|m| m.1).min().unwrap_or(0),
+        members.iter().map(|m| m.1).max().unwrap_or(0),
+    );
+    let housing_lat = find_housing(
+        &cs.coarse,
+        &lat,
+        a_span,
+        b_span,
+        pin_px0,
+        0.15 * cs.tip_contrast,
+    );
+    let anchor = housing_lat.map(|h| (0.5 * (h[0] + h[1]), 0.5 * (h[2] + h[3])));
+    let skipped = |r: u32, c: u32| recipe.is_skipped(r, c);
+    let placement = grid::place_window(&members, recipe.rows, recipe.cols, &skipped, anchor)
+        .ok_or_else(|| VisionError::NoPins {
+            part: part.clone(),
+            msg: "cannot place the grid".into(),
+        })?;
+    let in_window = |i: &grid::LatticeIndex| -> Option<(u32, u32)> {
+        let (c, r) = (i.a - placement.col0, i.b - placement.row0);
+        (c >= 0
+            && r >= 0
+            && c < recipe.cols as i64
+            && r < recipe.rows as i64
+            && !recipe.is_skipped(r as u32, c as u32))
+        .then_some((r as u32, c as u32))
+    };
+    let outside = idx
+        .iter()
+        .flatten()
+        .filter(|i| in_window(i).is_none())
+        .count();
+    if outside >= 2 && outside * 4 >= placement.score {
+        return Err(VisionError::WrongPart {
+            part,
+            msg: format!(
+                "{} pins lie on the grid but outside the recipe's {} × {} positions ({} inside): a different part?",
+                outside, recipe.rows, recipe.cols, placement.score
+            ),
+        });
+    }
+    if placement.ambiguous {
+        if housing_lat.is_some() {
+            warnings.push("pins alone do not place the grid (an end column or end pin missing): the housing centre decided".into());
+        } else {
+            warnings.push("pins alone do not place the grid and the housing was not found: grid centred on the pins found".into());
+        }
+    }
+
+    // Robust fit of the nominal grid to the pins (damaged tips left out).
+    let [ta_lo, ta_hi] = recipe.tip_area();
+    let (mut model, mut image) = (Vec::new(), Vec::new());
+    let (mut model_all, mut image_all) = (Vec::new(), Vec::new());
+    for (c, i) in cands.iter().zip(&idx) {
+        if let Some((r, col)) = i.as_ref().and_then(in_window) {
+            let uv = recipe.nominal_uv_mm(r, col);
+            model_all.push(uv);
+            image_all.push((c.m.x, c.m.y));
+            let a = c.m.area_px / tip_px0;
+            if a >= ta_lo && a <= ta_hi {
+                model.push(uv);
+                image.push((c.m.x, c.m.y));
+            }
+        }
+    }
+    if model.len() < 2 {
+        model = model_all;
+        image = image_all;
+    }
+    let fixed = recipe.mm_per_px.map(|_| s0);
+    let lat_s = lat.px / px_mm;
+    let centre_lat = (
+        placement.col0 as f64 + (recipe.cols as f64 - 1.0) / 2.0,
+        placement.row0 as f64 + (recipe.rows as f64 - 1.0) / 2.0,
+    );
+    let c0 = lat.to_image(centre_lat.0, centre_lat.1);
+    let init = Similarity {
+        s: fixed.unwrap_or(lat_s),
+        theta: lat.theta,
+        tx: c0.0,
+        ty: c0.1,
+    };
+    let (sim, inliers, rms) = if model.len() >= 2 {
+        match fit::robust_similarity(&model, &image, fixed, Some(init), 0.1) {
+            Some(f) => {
+                let n = f.inlier.iter().filter(|b| **b).count();
+                (f.sim, n, f.rms_px)
+            }
+            None => (init, 0, f64::NAN),
+        }
+    } else if model.len() == 1 {
+        // One pin: translation from it, rotation from the lattice (0 without neighbours).
+        let mut s = init;
+        let q = s.apply(model[0].0, model[0].1);
+        s.tx += image[0].0 - q.0;
+        s.ty += image[0].1 - q.1;
+        warnings.push("only one pin found: grid rotation taken as the image axes'".into());
+        (s, 1, 0.0)
+    } else {
+        (init, 0, f64::NAN)
+    };
+    if fixed.is_none() && model.len() < 2 {
+        return Err(VisionError::NoPins {
+            part,
+            msg: "cannot estimate mm_per_px from fewer than two pins".into(),
+        });
+    }
+    let mm_per_px = 1.0 / sim.s;
+    if fixed.is_none() {
+        warnings.push(format!(
+            "mm_per_px estimated from the pitch: {mm_per_px:.5}"
+        ));
+    }
+    let tip_px = recipe.tip_area_mm2() * sim.s * sim.s;
+
+    // Assign blobs to positions: nearest first, pin-like blobs preferred.
+    let positions = recipe.positions();
+    let nominal: Vec<(f64, f64)> = positions
+        .iter()
+        .map(|&(r, c)| {
+            let (u, v) = recipe.nominal_uv_mm(r, c);
+            sim.apply(u, v)
+        })
+        .collect();
+    let min_pitch_px = if recipe.rows > 1 {
+        px_mm.min(py_mm)
+    } else {
+        px_mm
+    } * sim.s;
+    let r_assign = 0.4 * min_pitch_px;
+    let mut pairs = Vec::new();
+    for (pi, n) in nominal.iter().enumerate() {
+        for (ci, c) in cands.iter().enumerate() {
+            let d = (c.m.x - n.0).hypot(c.m.y - n.1);
+            if d < r_assign {
+                let penalty = if c.m.area_px / tip_px < 0.15 {
+                    1e6
+                } else {
+                    0.0
+                };
+                pairs.push((d + penalty, pi, ci));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut pos_cand: Vec<Option<usize>> = vec![None; positions.len()];
+    let mut cand_used = vec![false; cands.len()];
+    for (_, pi, ci) in pairs {
+        if pos_cand[pi].is_none() && !cand_used[ci] {
+            pos_cand[pi] = Some(ci);
+            cand_used[ci] = true;
+        }
+    }
+    let tol = &recipe.tolerance;
+    let mut pins = Vec::with_capacity(positions.len());
+    for (pi, &(row, col)) in positions.iter().enumerate() {
+        let (nx, ny) = nominal[pi];
+        let mut pr = PinResult {
+            row,
+            col,
+            status: PinStatus::Missing,
+            nominal_x_px: nx,
+            nominal_y_px: ny,
+            x_px: None,
+            y_px: None,
+            dx_mm: None,
+            dy_mm: None,
+            offset_mm: None,
+            area_ratio: None,
+            height_mm: None,
+            width_ratio: None,
+            elongation: None,
+        };
+        if let Some(ci) = pos_cand[pi] {
+            let m = &cands[ci].m;
+            let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);
+            let (du, dv) = (du * mm_per_px, dv * mm_per_px);
+            let off = du.hypot(dv);
+            let ar = m.area_px / tip_px;
+            pr.x_px = Some(m.x);
+            pr.y_px = Some(m.y);
+            pr.dx_mm = Some(du);
+            pr.dy_mm = Some(dv);
+            pr.offset_mm = Some(off);
+            pr.area_ratio = Some(ar);
+            pr.elongation = Some(m.elongation);
+            pr.status = if ar < ta_lo || ar > ta_hi {
+                PinStatus::Damaged
+            } else if off > tol.position_mm {
+                PinStatus::Bent
+            } else {
+                PinStatus::Ok
+            };
+        }
+        pins.push(pr);
+    }
+
+    // Housing in the part frame (or the grid's extent as a stand-in).
+    let (u_half, v_half) = (
+        (recipe.cols as f64 - 1.0) / 2.0 * px_mm,
+        (recipe.rows as f64 - 1.0) / 2.0 * py_mm,
+    );
+    let housing = housing_lat.map(|h| {
+        let corners_lat = [(h[0], h[2]), (h[1], h[2]), (h[1], h[3]), (h[0], h[3])];
+        let corners_px = corners_lat.map(|(a, b)| lat.to_image(a, b));
+        let uv: Vec<(f64, f64)> = corners_px.iter().map(|p| sim.inverse(p.0, p.1)).collect();
+        let extent_mm = [
+            0.5 * (uv[0].0 + uv[3].0),
+            0.5 * (uv[1].0 + uv[2].0),
+            0.5 * (uv[0].1 + uv[1].1),
+            0.5 * (uv[2].1 + uv[3].1),
+        ];
+        Housing {
+            corners_px,
+            extent_mm,
+            edge: None,
+        }
+    });
+    let rect = match &housing {
+        Some(h) => h.extent_mm,
+        None => {
+            warnings.push("housing outline not found: extras are judged against the grid grown by half a pitch".into());
+            [
+                -u_half - 0.5 * px_mm,
+                u_half + 0.5 * px_mm,
+                -v_half - 0.5 * py_mm,
+                v_half + 0.5 * py_mm,
+            ]
+        }
+    };
+    let rule = &recipe.extras;
+    let mut extras = Vec::new();
+    let mut ignored = Vec::new();
+    for (ci, c) in cands.iter().enumerate() {
+        if cand_used[ci] {
+            continue;
+        }
+        let ar = c.m.area_px / tip_px;
+        let (u, v) = sim.inverse(c.m.x, c.m.y);
+        let dist = rect_distance(u, v, rect);
+        let mut e = ExtraResult {
+            x_px: c.m.x,
+            y_px: c.m.y,
+            area_ratio: ar,
+            distance_mm: Some(dist),
+            ignored_because: None,
+        };
+        if ar < rule.min_area_ratio {
+            if ar >= 0.5 * rule.min_area_ratio {
+                e.ignored_because = Some(format!(
+                    "area {:.2} of a tip, below {}",
+                    ar, rule.min_area_ratio
+                ));
+                ignored.push(e);
+            }
+        } else if dist > rule.max_distance_pitch * px_mm {
+            e.ignored_because = Some(format!(
+                "{dist:.2} mm from the housing, beyond {} pitch",
+                rule.max_distance_pitch
+            ));
+            ignored.push(e);
+        } else {
+            extras.push(e);
+        }
+    }
+
+    let (cx, cy) = sim.apply(0.0, 0.0);
+    let mut ins = Inspection {
+        part_number: recipe.part_number.clone(),
+        view: recipe.view,
+        verdict: Verdict::Fail,
+        tolerance: super::recipe::Tolerance {
+            tip_area: if recipe.view == super::recipe::View::Top {
+                Some(recipe.tip_area())
+            } else {
+                None
+            },
+            ..recipe.tolerance.clone()
+        },
+        image: info,
+        grid: GridFit {
+            transform: sim,
+            centre_px: (cx, cy),
+            rotation_deg: sim.theta.to_degrees(),
+            mm_per_px,
+            mm_per_px_estimated: fixed.is_none(),
+            fit_inliers: inliers,
+            fit_rms_px: rms,
+            anchored_by_housing: placement.ambiguous && housing_lat.is_some(),
+        },
+        housing,
+        pins,
+        extras,
+        ignored,
+        counts: StatusCounts::default(),
+        warnings,
+    };
+    ins.finish();
+    Ok(ins)
+}
