@@ -1,0 +1,476 @@
+//! A small, strict, allocation-free scanner for the flat JSON objects of rig
+//! messages, with the non-standard tokens rigs write (`NaN`, `Infinity`,
+//! `-Infinity`, which Python's `json` emits).
+//!
+//! Why not `serde_json` for every message: a signal message is ~40 bytes and
+//! a log holds millions; extracting one or two numeric fields by scanning the
+//! object without building a map is several times faster, and `serde_json`
+//! rejects the `NaN` token that rig-log.md says is a missing sample. Strings
+//! with escapes are decoded by `serde_json`. The scanner is checked against
+//! `serde_json` on standard JSON in the tests.
+
+/// A JSON value, borrowed from the message.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Val<'a> {
+    /// A number, as written.
+    Num(&'a [u8]),
+    /// A string's raw content (between the quotes, escapes not decoded).
+    Str(&'a [u8]),
+    Null,
+    Bool(bool),
+    /// The token `NaN`.
+    NaN,
+    /// `Infinity` (false) or `-Infinity` (true).
+    Inf(bool),
+    /// An array, raw including brackets.
+    Array(&'a [u8]),
+    /// An object, raw including braces.
+    Object(&'a [u8]),
+}
+
+/// Where and why a message is not valid JSON.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct JsonError {
+    pub pos: usize,
+    pub what: &'static str,
+}
+
+impl std::fmt::Display for JsonError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} at byte {}", self.what, self.pos)
+    }
+}
+
+/// A number-like value turned into a sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Num {
+    Finite(f64),
+    /// The `NaN` token.
+    NanToken,
+    Null,
+    /// ±Infinity tokens, or a number too large for f64.
+    NonFinite,
+    /// Not a number at all (string, bool, object, ...).
+    NotNumber,
+}
+
+const MAX_DEPTH: usize = 64;
+
+struct P<'a> {
+    b: &'a [u8],
+    i: usize,
+}
+
+impl<'a> P<'a> {
+    fn err<T>(&self, what: &'static str) -> Result<T, JsonError> {
+        Err(JsonError { pos: self.i, what })
+    }
+
+    #[inline]
+    fn ws(&mut self) {
+        while let Some(&c) = self.b.get(self.i) {
+            if c == b' ' || c == b'\n' || c == b'\r' || c == b'\t' {
+                self.i += 1;
+            } else {
+                break;
+            }
+        }
+    }
+
+    #[inline]
+    fn peek(&self) -> Option<u8> {
+        self.b.get(self.i).copied()
+    }
+
+    fn lit(&mut self, word: &[u8]) -> bool {
+        if self.b[self.i..].starts_with(word) {
+            self.i += word.len();
+            true
+        } else {
+            false
+        }
+    }
+
+    fn string(&mut self) -> Result<&'a [u8], JsonError> {
+        // at '"'
+        self.i += 1;
+        let start = self.i;
+        loop {
+            match self.b.get(self.i) {
+                None => return self.err("unterminated string"),
+                Some(b'"') => {
+                    let s = &self.b[start..self.i];
+                    self.i += 1;
+                    return Ok(s);
+                }
+                Some(b'\\') => self.i += 2,
+                Some(&c) if c < 0x20 => return self.err("control character in string"),
+                Some(_) => self.i += 1,
+            }
+        }
+    }
+
+    fn digits(&mut self) -> usize {
+        let s = self.i;
+        while matches!(self.peek(), Some(b'0'..=b'9')) {
+            self.i += 1;
+        }
+        self.i - s
+    }
+
+    fn number(&mut self) -> Result<Val<'a>, JsonError> {
+        let start = self.i;
+        if self.peek() == Some(b'-') {
+            self.i += 1;
+            if self.lit(b"Infinity") {
+                return Ok(Val::Inf(true));
+            }
+        }
+        if self.digits() == 0 {
+            return self.err("invalid number");
+        }
+        if self.peek() == Some(b'.') {
+            self.i += 1;
+            if self.digits() == 0 {
+                return self.err("invalid number");
+            }
+        }
+        if matches!(self.peek(), Some(b'e' | b'E')) {
+            self.i += 1;
+            if matches!(self.peek(), Some(b'+' | b'-')) {
+                self.i += 1;
+            }
+            if self.digits() == 0 {
+                return self.err("invalid number");
+            }
+        }
+        Ok(Val::Num(&self.b[start..self.i]))
+    }
+
+    fn value(&mut self, depth: usize) -> Result<Val<'a>, JsonError> {
+        self.ws();
+        match self.peek() {
+            None => self.err("unexpected end"),
+            Some(b'"') => Ok(Val::Str(self.string()?)),
+            Some(b'-' | b'0'..=b'9') => self.number(),
+            Some(b'{') => {
+                let s = self.i;
+                self.skip_object(depth + 1)?;
+                Ok(Val::Object(&self.b[s..self.i]))
+            }
+            Some(b'[') => {
+                let s = self.i;
+                self.skip_array(depth + 1)?;
+                Ok(Val::Array(&self.b[s..self.i]))
+            }
+            Some(b'n') if self.lit(b"null") => Ok(Val::Null),
+            Some(b't') if self.lit(b"true") => Ok(Val::Bool(true)),
+            Some(b'f') if self.lit(b"false") => Ok(Val::Bool(false)),
+            Some(b'N') if self.lit(b"NaN") => Ok(Val::NaN),
+            Some(b'I') if self.lit(b"Infinity") => Ok(Val::Inf(false)),
+            Some(_) => self.err("unexpected character"),
+        }
+    }
+
+    fn skip_object(&mut self, depth: usize) -> Result<(), JsonError> {
+        self.members(depth, |_, _| {})
+    }
+
+    fn skip_array(&mut self, depth: usize) -> Result<(), JsonError> {
+        self.elements(depth, |_| {})
+    }
+
+    fn members(
+        &mut self,
+        depth: usize,
+        mut f: impl FnMut(&'a [u8], Val<'a>),
+    ) -> Result<(), JsonError> {
+        if depth > MAX_DEPTH {
+            return self.err("nested too deeply");
+        }
+        self.ws();
+        if self.peek() != Some(b'{') {
+            return self.err("expected an object");
+        }
+        self.i += 1;
+        self.ws();
+        if self.peek() == Some(b'}') {
+            self.i += 1;
+            return Ok(());
+        }
+        loop {
+            self.ws();
+            if self.peek() != Some(b'"') {
+                return self.err("expected a key");
+            }
+            let k = self.string()?;
+            self.ws();
+            if self.peek() != Some(b':') {
+                return self.err("expected ':'");
+            }
+            self.i += 1;
+            let v = self.value(depth)?;
+            f(k, v);
+            self.ws();
+            match self.peek() {
+                Some(b',') => self.i += 1,
+                Some(b'}') => {
+                    self.i += 1;
+                    return Ok(());
+                }
+                _ => return self.err("expected ',' or '}'"),
+            }
+        }
+    }
+
+    fn elements(&mut self, depth: usize, mut f: impl FnMut(Val<'a>)) -> Result<(), JsonError> {
+        if depth > MAX_DEPTH {
+            return self.err("nested too deeply");
+        }
+        self.ws();
+        if self.peek() != Some(b'[') {
+            return self.err("expected an array");
+        }
+        self.i += 1;
+        self.ws();
+        if self.peek() == Some(b']') {
+            self.i += 1;
+            return Ok(());
+        }
+        loop {
+            let v = self.value(depth)?;
+            f(v);
+            self.ws();
+            match self.peek() {
+                Some(b',') => self.i += 1,
+                Some(b']') => {
+                    self.i += 1;
+                    return Ok(());
+                }
+                _ => return self.err("expected ',' or ']'"),
+            }
+        }
+    }
+
+    fn end(&mut self) -> Result<(), JsonError> {
+        self.ws();
+        if self.i != self.b.len() {
+            return self.err("trailing characters");
+        }
+        Ok(())
+    }
+}
+
+/// Calls `f(raw_key, value)` for each member of the top-level object.
+pub fn for_each_member<'a>(b: &'a [u8], f: impl FnMut(&'a [u8], Val<'a>)) -> Result<(), JsonError> {
+    let mut p = P { b, i: 0 };
+    p.members(0, f)?;
+    p.end()
+}
+
+/// Calls `f(value)` for each element of an array (raw, including brackets).
+pub fn for_each_element<'a>(b: &'a [u8], f: impl FnMut(Val<'a>)) -> Result<(), JsonError> {
+    let mut p = P { b, i: 0 };
+    p.elements(0, f)?;
+    p.end()
+}
+
+/// Whether a raw key (escapes not decoded) equals `name`.
+pub fn key_is(raw: &[u8], name: &str) -> bool {
+    if !raw.contains(&b'\\') {
+        return raw == name.as_bytes();
+    }
+    unescape(raw).is_some_and(|s| s == name)
+}
+
+/// Decodes a raw string's content (handles escapes via serde_json).
+pub fn unescape(raw: &[u8]) -> Option<String> {
+    if !raw.contains(&b'\\') {
+        return std::str::from_utf8(raw).ok().map(str::to_string);
+    }
+    let mut quoted = Vec::with_capacity(raw.len() + 2);
+    quoted.push(b'"');
+    quoted.extend_from_slice(raw);
+    quoted.push(b'"');
+    serde_json::from_slice::<String>(&quoted).ok()
+}
+
+impl Val<'_> {
+    /// The value as a sample.
+    pub fn num(&self) -> Num {
+        match self {
+            Val::Num(s) => {
+                // The scanner only lets ASCII number syntax through.
+                match std::str::from_utf8(s)
+                    .ok()
+                    .and_then(|t| t.parse::<f64>().ok())
+                {
+                    Some(x) if x.is_finite() => Num::Finite(x),
+                    Some(_) => Num::NonFinite,
+                    None => Num::NotNumber,
+                }
+            }
+            Val::NaN => Num::NanToken,
+            Val::Null => Num::Null,
+            Val::Inf(_) => Num::NonFinite,
+            _ => Num::NotNumber,
+        }
+    }
+
+    /// The value as an exact unsigned integer (timestamps, indices): digits
+    /// are parsed exactly; a number written with a fraction or exponent is
+    /// accepted only when integral and below 2^53.
+    pub fn u64(&self) -> Option<u64> {
+        match self {
+            Val::Num(s) => {
+                if s.iter().all(u8::is_ascii_digit) {
+                    std::str::from_utf8(s).ok()?.parse::<u64>().ok()
+                } else {
+                    let x: f64 = std::str::from_utf8(s).ok()?.parse().ok()?;
+                    (x >= 0.0 && x.fract() == 0.0 && x < 9.007_199_254_740_992e15)
+                        .then_some(x as u64)
+                }
+            }
+            _ => None,
+        }
+    }
+
+    /// The value as a string (decoded).
+    pub fn string(&self) -> Option<String> {
+        match self {
+            Val::Str(raw) => unescape(raw),
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn members(s: &str) -> Result<Vec<(String, String)>, JsonError> {
+        let mut out = Vec::new();
+        for_each_member(s.as_bytes(), |k, v| {
+            out.push((String::from_utf8_lossy(k).to_string(), format!("{v:?}")))
+        })?;
+        Ok(out)
+    }
+
+    #[test]
+    fn scans_flat_objects_and_tokens() {
+        let m = members(
+            r#"{"angle_rad": 3.14, "speed_rpm": -1.5e3, "x": NaN, "y": null, "z": -Infinity}"#,
+        )
+        .unwrap();
+        assert_eq!(m.len(), 5);
+        let mut vals = Vec::new();
+        for_each_member(
+            br#"{"a": 3.25, "b": NaN, "c": null, "d": Infinity, "e": "s", "f": 1e999}"#,
+            |_, v| vals.push(v.num()),
+        )
+        .unwrap();
+        assert_eq!(
+            vals,
+            vec![
+                Num::Finite(3.25),
+                Num::NanToken,
+                Num::Null,
+                Num::NonFinite,
+                Num::NotNumber,
+                Num::NonFinite
+            ]
+        );
+    }
+
+    #[test]
+    fn exact_integers() {
+        let mut t = None;
+        for_each_member(br#"{"t0_ns": 1795156933118090001, "i": 3.0}"#, |k, v| {
+            if key_is(k, "t0_ns") {
+                t = v.u64();
+            } else {
+                assert_eq!(v.u64(), Some(3));
+            }
+        })
+        .unwrap();
+        assert_eq!(t, Some(1_795_156_933_118_090_001));
+    }
+
+    #[test]
+    fn rejects_malformed() {
+        for bad in [
+            "",
+            "{",
+            "{\"a\":}",
+            "{\"a\" 1}",
+            "{\"a\":1,}",
+            "{\"a\":1} x",
+            "[1]",
+            "{\"a\":01.}",
+            "{\"a\":\"x}",
+            "{\"a\":-}",
+            "{\"a\":1e}",
+        ] {
+            assert!(for_each_member(bad.as_bytes(), |_, _| {}).is_err(), "{bad}");
+        }
+        let deep = "{\"a\":".to_string() + &"[".repeat(200) + &"]".repeat(200) + "}";
+        assert!(for_each_member(deep.as_bytes(), |_, _| {}).is_err());
+    }
+
+    #[test]
+    fn arrays_and_escaped_keys() {
+        let mut xs = Vec::new();
+        for_each_element(b"[1, 2.5, NaN, null, -3]", |v| xs.push(v.num())).unwrap();
+        assert_eq!(xs.len(), 5);
+        assert_eq!(xs[1], Num::Finite(2.5));
+        let mut hit = false;
+        for_each_member(br#"{"for\u0063e_n": 1}"#, |k, _| hit = key_is(k, "force_n")).unwrap();
+        assert!(hit);
+    }
+
+    fn arb_json() -> impl Strategy<Value = serde_json::Value> {
+        let leaf = prop_oneof![
+            Just(serde_json::Value::Null),
+            any::<bool>().prop_map(serde_json::Value::Bool),
+            (-1e12f64..1e12).prop_map(|x| serde_json::json!(x)),
+            any::<i64>().prop_map(|x| serde_json::json!(x)),
+            "[a-z\\\\\"\\n ]{0,8}".prop_map(serde_json::Value::String),
+        ];
+        leaf.prop_recursive(3, 24, 4, |inner| {
+            prop_oneof![
+                prop::collection::vec(inner.clone(), 0..4).prop_map(serde_json::Value::Array),
+                prop::collection::btree_map("[a-z_]{1,6}", inner, 0..4)
+                    .prop_map(|m| serde_json::Value::Object(m.into_iter().collect())),
+            ]
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// On standard JSON objects the scanner finds the same keys and numbers as serde_json.
+        #[test]
+        fn agrees_with_serde_json(m in prop::collection::btree_map("[a-z_]{1,6}", arb_json(), 0..6)) {
+            let obj = serde_json::Value::Object(m.clone().into_iter().collect());
+            let text = serde_json::to_string_pretty(&obj).unwrap();
+            let mut seen = Vec::new();
+            for_each_member(text.as_bytes(), |k, v| seen.push((unescape(k).unwrap(), v))).unwrap();
+            prop_assert_eq!(seen.len(), m.len());
+            for (k, v) in &seen {
+                let want = &m[k];
+                match want {
+                    serde_json::Value::Number(n) => prop_assert_eq!(v.num(), Num::Finite(n.as_f64().unwrap())),
+                    serde_json::Value::String(s) => { let got = v.string(); prop_assert_eq!(got.as_deref(), Some(s.as_str())) }
+                    serde_json::Value::Null => prop_assert_eq!(*v, Val::Null),
+                    _ => {}
+                }
+            }
+        }
+
+        /// Arbitrary bytes never panic the scanner.
+        #[test]
+        fn never_panics(bytes in prop::collection::vec(any::<u8>(), 0..64)) {
+            let _ = for_each_member(&bytes, |_, v| { let _ = v.num(); let _ = v.u64(); });
+        }
+    }
+}
