@@ -369,7 +369,10 @@ where
         .margin(10)
         .x_label_area_size(40)
         .y_label_area_size(70)
-        .build_cartesian_2d(0f64..ncat as f64, (ymin - if ymin < 0.0 { pad } else { 0.0 })..(ymax + pad))
+        .build_cartesian_2d(
+            0f64..ncat as f64,
+            (ymin - if ymin < 0.0 { pad } else { 0.0 })..(ymax + pad),
+        )
         .map_err(draw_err(title))?;
     let cats = chart.categories.clone();
     c.configure_mesh()
@@ -441,7 +444,12 @@ pub enum Panel {
 }
 
 /// Renders panels stacked in a grid (`cols` columns) into an RGB buffer.
-pub fn render_rgb(panels: &[Panel], cols: usize, width: u32, height: u32) -> Result<Vec<u8>, PlotError> {
+pub fn render_rgb(
+    panels: &[Panel],
+    cols: usize,
+    width: u32,
+    height: u32,
+) -> Result<Vec<u8>, PlotError> {
     register_font();
     let mut buf = vec![255u8; (width as usize) * (height as usize) * 3];
     {
@@ -462,7 +470,12 @@ pub fn render_rgb(panels: &[Panel], cols: usize, width: u32, height: u32) -> Res
 }
 
 /// Renders panels and encodes them as PNG bytes.
-pub fn render_png(panels: &[Panel], cols: usize, width: u32, height: u32) -> Result<Vec<u8>, PlotError> {
+pub fn render_png(
+    panels: &[Panel],
+    cols: usize,
+    width: u32,
+    height: u32,
+) -> Result<Vec<u8>, PlotError> {
     let buf = render_rgb(panels, cols, width, height)?;
     let img = image::RgbImage::from_raw(width, height, buf).ok_or_else(|| PlotError::Draw {
         title: "figure".into(),
@@ -478,7 +491,13 @@ pub fn render_png(panels: &[Panel], cols: usize, width: u32, height: u32) -> Res
 }
 
 /// Renders panels into a PNG file.
-pub fn write_png(path: &Path, panels: &[Panel], cols: usize, width: u32, height: u32) -> Result<(), PlotError> {
+pub fn write_png(
+    path: &Path,
+    panels: &[Panel],
+    cols: usize,
+    width: u32,
+    height: u32,
+) -> Result<(), PlotError> {
     let bytes = render_png(panels, cols, width, height)?;
     std::fs::write(path, bytes).map_err(|e| PlotError::Write {
         path: path.display().to_string(),
@@ -492,7 +511,9 @@ mod tests {
 
     #[test]
     fn line_and_bar_charts_render_nonblank_png() {
-        let sine: Vec<(f64, f64)> = (0..200).map(|i| (i as f64, (i as f64 / 20.0).sin())).collect();
+        let sine: Vec<(f64, f64)> = (0..200)
+            .map(|i| (i as f64, (i as f64 / 20.0).sin()))
+            .collect();
         let chart = LineChart {
             title: "sine".into(),
             x_label: "x".into(),
@@ -514,14 +535,19 @@ mod tests {
         let bars = BarChart {
             title: "bars".into(),
             categories: vec!["a".into(), "b".into()],
-            series: vec![("s1".into(), vec![1.0, 2.0]), ("s2".into(), vec![1.5, f64::NAN])],
+            series: vec![
+                ("s1".into(), vec![1.0, 2.0]),
+                ("s2".into(), vec![1.5, f64::NAN]),
+            ],
             errors: Some(vec![vec![0.1, 0.2], vec![0.1, 0.1]]),
             ..Default::default()
         };
         let loglog = LineChart {
             title: "loglog".into(),
-            series: vec![Series::line("p", vec![(1e-3, 1e-9), (1e-2, 1e-5), (0.1, 1e-1)])
-                .with_style(SeriesStyle::LinePoints)],
+            series: vec![
+                Series::line("p", vec![(1e-3, 1e-9), (1e-2, 1e-5), (0.1, 1e-1)])
+                    .with_style(SeriesStyle::LinePoints),
+            ],
             log_x: true,
             log_y: true,
             ..Default::default()
@@ -544,7 +570,10 @@ mod tests {
     fn empty_and_nonfinite_data_do_not_fail() {
         let chart = LineChart {
             title: "empty".into(),
-            series: vec![Series::line("nan", vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)])],
+            series: vec![Series::line(
+                "nan",
+                vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)],
+            )],
             log_y: true,
             ..Default::default()
         };

@@ -1,1 +1,10 @@
 //! Mechanism model: parameters, presets, kinematics, kinetostatics, contact, clearance ODE.
+
+pub mod contact;
+pub mod kinematics;
+pub mod kinetostatics;
+pub mod materials;
+pub mod params;
+pub mod table;
+
+pub use params::{ContactModel, ParamError, Params};

@@ -1,0 +1,182 @@
+//! Contact-impact law of the clearance joint, friction smoothing and the
+//! process load (model.md, "Clearance joint contact" and "Loads").
+
+use super::params::{ContactModel, Params};
+use super::table::Table;
+use serde::Serialize;
+
+/// Hertz stiffness of a journal inside a bearing (internal cylinders):
+/// K = (4/3) / (σ_J + σ_B) · sqrt(R_J R_B / (R_B − R_J)), N/m^1.5.
+/// Infinite when the clearance is zero (the joint is then ideal).
+pub fn hertz_stiffness(p: &Params) -> f64 {
+    let rb = p.rb();
+    if p.clearance <= 0.0 {
+        return f64::INFINITY;
+    }
+    (4.0 / 3.0) / (p.journal.sigma() + p.bearing.sigma()) * (p.rj * rb / p.clearance).sqrt()
+}
+
+/// The normal-force law with its constants resolved.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ContactLaw {
+    /// Stiffness K, N/m^1.5.
+    pub k: f64,
+    /// Hysteresis factor D.
+    pub d: f64,
+    /// Floor on the onset approach velocity, m/s.
+    pub approach_floor: f64,
+    pub model: ContactModel,
+}
+
+impl ContactLaw {
+    pub fn of(p: &Params) -> Self {
+        Self {
+            k: hertz_stiffness(p),
+            d: p.contact_model.damping_factor(p.restitution),
+            approach_floor: p.approach_floor,
+            model: p.contact_model,
+        }
+    }
+
+    /// F_N = max(0, K δ^1.5 (1 + D δ̇ / δ̇⁻)) for penetration δ (≤ 0: no force),
+    /// penetration rate δ̇ and onset approach velocity δ̇⁻ (floored).
+    #[inline]
+    pub fn normal_force(&self, delta: f64, delta_dot: f64, approach: f64) -> f64 {
+        if delta <= 0.0 {
+            return 0.0;
+        }
+        let v_minus = approach.max(self.approach_floor);
+        let f = self.k * delta * delta.sqrt() * (1.0 + self.d * delta_dot / v_minus);
+        f.max(0.0)
+    }
+
+    /// Natural angular frequency of small contact oscillations at penetration
+    /// δ for an effective mass m: ω = sqrt(1.5 K sqrt(δ) / m) (pitfalls.md).
+    pub fn frequency(&self, delta: f64, m_eff: f64) -> f64 {
+        (1.5 * self.k * delta.max(0.0).sqrt() / m_eff).sqrt()
+    }
+}
+
+/// The friction smoothing ramp c_d(|v|): 0 below v0, 1 above v1, linear between.
+#[inline]
+pub fn smoothing(v_abs: f64, v0: f64, v1: f64) -> f64 {
+    if v_abs <= v0 {
+        0.0
+    } else if v_abs >= v1 {
+        1.0
+    } else {
+        (v_abs - v0) / (v1 - v0)
+    }
+}
+
+/// Modified Coulomb friction force (Ambrósio): −coef · c_d(|v|) · N · sign(v).
+#[inline]
+pub fn coulomb(coef: f64, normal: f64, v: f64, v0: f64, v1: f64) -> f64 {
+    if coef == 0.0 || normal == 0.0 {
+        return 0.0;
+    }
+    -coef * smoothing(v.abs(), v0, v1) * normal * v.signum()
+}
+
+/// The process load on the pin bar from the part (regularized law).
+#[derive(Debug, Clone, Serialize)]
+pub struct ProcessLoad {
+    pub standoff: f64,
+    pub f_ins: Table,
+    pub f_wd: Table,
+    pub v0: f64,
+    pub v1: f64,
+}
+
+impl ProcessLoad {
+    pub fn of(p: &Params) -> Self {
+        Self {
+            standoff: p.standoff,
+            f_ins: p.f_ins.clone(),
+            f_wd: p.f_wd.clone(),
+            v0: p.v0,
+            v1: p.v1,
+        }
+    }
+
+    /// Force along x on the pin bar at stroke `s` and velocity `v4`:
+    /// −F_ins(d)·c_d(v4) moving down, +F_wd(d)·c_d(|v4|) moving up, zero
+    /// before the pin meets the part (d = s − standoff ≤ 0).
+    #[inline]
+    pub fn force(&self, s: f64, v4: f64) -> f64 {
+        let d = s - self.standoff;
+        if d <= 0.0 {
+            return 0.0;
+        }
+        if v4 > 0.0 {
+            -self.f_ins.eval(d) * smoothing(v4, self.v0, self.v1)
+        } else if v4 < 0.0 {
+            self.f_wd.eval(d) * smoothing(-v4, self.v0, self.v1)
+        } else {
+            0.0
+        }
+    }
+
+    pub fn is_zero(&self) -> bool {
+        self.f_ins.is_zero() && self.f_wd.is_zero()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flores_stiffness_values() {
+        let mut p = Params::flores();
+        assert!((hertz_stiffness(&p) / 6.6102e10 - 1.0).abs() < 1e-4);
+        p.clearance = 0.25e-3;
+        assert!((hertz_stiffness(&p) / 9.2306e10 - 1.0).abs() < 1e-4);
+        p.clearance = 0.1e-3;
+        assert!((hertz_stiffness(&p) / 1.44822e11 - 1.0).abs() < 1e-5);
+        p.clearance = 0.0;
+        assert!(hertz_stiffness(&p).is_infinite());
+    }
+
+    #[test]
+    fn normal_force_law() {
+        let law = ContactLaw {
+            k: 1e10,
+            d: 0.5,
+            approach_floor: 1e-3,
+            model: ContactModel::LankaraniNikravesh,
+        };
+        assert_eq!(law.normal_force(-1e-6, 1.0, 1.0), 0.0);
+        let d: f64 = 1e-6;
+        let f0 = 1e10 * d.powf(1.5);
+        assert!((law.normal_force(d, 0.0, 1.0) - f0).abs() < 1e-9 * f0);
+        assert!((law.normal_force(d, 1.0, 1.0) - 1.5 * f0).abs() < 1e-9 * f0);
+        // Large separation speed: the force is clipped at zero, never pulls.
+        assert_eq!(law.normal_force(d, -3.0, 1.0), 0.0);
+        // The approach velocity is floored.
+        assert!((law.normal_force(d, 1e-3, 0.0) - 1.5 * f0).abs() < 1e-9 * f0);
+    }
+
+    #[test]
+    fn smoothing_and_coulomb() {
+        assert_eq!(smoothing(0.5e-4, 1e-4, 1e-3), 0.0);
+        assert!((smoothing(5.5e-4, 1e-4, 1e-3) - 0.5).abs() < 1e-12);
+        assert_eq!(smoothing(2.0, 1e-4, 1e-3), 1.0);
+        assert_eq!(coulomb(0.1, 10.0, 2.0, 1e-4, 1e-3), -1.0);
+        assert_eq!(coulomb(0.1, 10.0, -2.0, 1e-4, 1e-3), 1.0);
+        assert_eq!(coulomb(0.1, 10.0, 0.0, 1e-4, 1e-3), 0.0);
+    }
+
+    #[test]
+    fn process_load_resists_motion() {
+        let p = Params::paper();
+        let pl = ProcessLoad::of(&p);
+        assert_eq!(pl.force(13e-3, 1.0), 0.0);
+        assert!((pl.force(14.35e-3, 1.0) + 14.5).abs() < 1e-9);
+        assert_eq!(pl.force(16e-3, 1.0), -23.0);
+        // Moving up with no withdrawal table: no force.
+        assert_eq!(pl.force(15e-3, -1.0), 0.0);
+        // At rest the regularized law gives no force.
+        assert_eq!(pl.force(15e-3, 0.0), 0.0);
+    }
+}

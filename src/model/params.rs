@@ -1,0 +1,1136 @@
+//! Mechanism parameters: presets, the key registry shared by parameter files,
+//! `--set key=value` overrides and the TUI's Model pane, and validation.
+//!
+//! Values are stored in SI units. Every key a user sees carries its unit in
+//! its name (`clearance_mm`, `m4_kg`, `motor_rpm` …); [`PARAM_SPECS`] lists them
+//! with their unit, meaning and allowed range, and [`Params::set`] converts and
+//! checks one value. A parameter file is a flat TOML table of such keys, with
+//! an optional `preset = "paper" | "flores"` as its base.
+
+use super::materials::Material;
+use super::table::Table;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::Path;
+
+/// Contact force model of the clearance joint (model.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactModel {
+    LankaraniNikravesh,
+    Flores,
+    HuntCrossley,
+    Hertz,
+}
+
+impl ContactModel {
+    pub const ALL: [ContactModel; 4] = [
+        ContactModel::LankaraniNikravesh,
+        ContactModel::Flores,
+        ContactModel::HuntCrossley,
+        ContactModel::Hertz,
+    ];
+    pub fn name(self) -> &'static str {
+        match self {
+            ContactModel::LankaraniNikravesh => "lankarani_nikravesh",
+            ContactModel::Flores => "flores",
+            ContactModel::HuntCrossley => "hunt_crossley",
+            ContactModel::Hertz => "hertz",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == s.trim())
+    }
+    /// Hysteresis factor D for restitution `ce` (model.md).
+    pub fn damping_factor(self, ce: f64) -> f64 {
+        match self {
+            ContactModel::LankaraniNikravesh => 3.0 * (1.0 - ce * ce) / 4.0,
+            ContactModel::Flores => 8.0 * (1.0 - ce) / (5.0 * ce),
+            ContactModel::HuntCrossley => 3.0 * (1.0 - ce) / 2.0,
+            ContactModel::Hertz => 0.0,
+        }
+    }
+}
+
+/// How the process load acts around v4 = 0 (model.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProcessLaw {
+    /// Smoothed like friction with the c_d ramp (default).
+    Regularized,
+    /// Set-valued stick law (optional refinement; not implemented yet).
+    Stick,
+}
+
+impl ProcessLaw {
+    pub fn name(self) -> &'static str {
+        match self {
+            ProcessLaw::Regularized => "regularized",
+            ProcessLaw::Stick => "stick",
+        }
+    }
+}
+
+/// How the crank is driven.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Driver {
+    /// θ2 = θ0 + ω t (default).
+    ConstantSpeed,
+    /// A motor with torque–speed curve and flywheel (the `motor` level; not
+    /// implemented yet — the driver is a parameter so the level can be added
+    /// without changing the file format).
+    Motor,
+}
+
+impl Driver {
+    pub fn name(self) -> &'static str {
+        match self {
+            Driver::ConstantSpeed => "constant_speed",
+            Driver::Motor => "motor",
+        }
+    }
+}
+
+/// All parameters of the mechanism, in SI units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// The preset these parameters started from.
+    pub preset: String,
+    /// Crank length r, m.
+    pub r: f64,
+    /// Connecting rod length l, m.
+    pub l: f64,
+    /// Offset of the pin bar's line of motion (y), m.
+    pub offset: f64,
+    pub m2: f64,
+    pub lc2: f64,
+    pub i2: f64,
+    pub m3: f64,
+    pub lc3: f64,
+    pub i3: f64,
+    pub m4: f64,
+    /// Journal radius R_J, m.
+    pub rj: f64,
+    /// Radial clearance c = R_B − R_J, m.
+    pub clearance: f64,
+    pub journal: Material,
+    pub bearing: Material,
+    pub contact_model: ContactModel,
+    /// Restitution coefficient ce.
+    pub restitution: f64,
+    /// Joint friction coefficient c_f.
+    pub c_f: f64,
+    /// Guide friction coefficient μ_g.
+    pub mu_g: f64,
+    /// Friction smoothing: c_d = 0 below v0, 1 above v1 (m/s).
+    pub v0: f64,
+    pub v1: f64,
+    /// Floor on the onset approach velocity δ̇⁻ (m/s).
+    pub approach_floor: f64,
+    pub motor_rpm: f64,
+    pub gear_ratio: f64,
+    /// Stroke at which the pin meets the part, m.
+    pub standoff: f64,
+    pub f_ins: Table,
+    pub f_wd: Table,
+    pub process_law: ProcessLaw,
+    /// Gravity vector in the model frame, m/s².
+    pub gravity: [f64; 2],
+    pub driver: Driver,
+}
+
+/// Names of the presets.
+pub const PRESETS: [&str; 2] = ["paper", "flores"];
+
+impl Params {
+    /// The `paper` preset: a representative pin-insertion head (model.md).
+    pub fn paper() -> Self {
+        let steel = Material::by_name("alloy_steel").expect("built-in material");
+        Self {
+            preset: "paper".into(),
+            r: 8e-3,
+            l: 45e-3,
+            offset: 0.0,
+            m2: 0.20,
+            lc2: 4e-3,
+            i2: 2.0e-5,
+            m3: 0.06,
+            lc3: 22.5e-3,
+            i3: 1.2e-5,
+            m4: 0.08,
+            rj: 3.0e-3,
+            clearance: 0.1e-3,
+            journal: steel.clone(),
+            bearing: steel,
+            contact_model: ContactModel::LankaraniNikravesh,
+            restitution: 0.9,
+            c_f: 0.0,
+            mu_g: 0.01,
+            v0: 1e-4,
+            v1: 1e-3,
+            approach_floor: 1e-3,
+            motor_rpm: 1200.0,
+            gear_ratio: 1.0,
+            standoff: 14.0e-3,
+            f_ins: Table::from_mm(&[(0.0, 0.0), (0.2, 8.0), (0.5, 21.0), (2.0, 23.0)])
+                .expect("built-in table"),
+            f_wd: Table::zero(),
+            process_law: ProcessLaw::Regularized,
+            gravity: [9.81, 0.0],
+            driver: Driver::ConstantSpeed,
+        }
+    }
+
+    /// The `flores` preset: the literature's slider-crank benchmark
+    /// (flores-benchmark.md), c = 0.5 mm.
+    pub fn flores() -> Self {
+        let steel = Material::by_name("alloy_steel").expect("built-in material");
+        Self {
+            preset: "flores".into(),
+            r: 0.05,
+            l: 0.12,
+            offset: 0.0,
+            m2: 0.30,
+            lc2: 0.025,
+            i2: 1.0e-4,
+            m3: 0.21,
+            lc3: 0.06,
+            i3: 2.5e-4,
+            m4: 0.14,
+            rj: 9.5e-3,
+            clearance: 0.5e-3,
+            journal: steel.clone(),
+            bearing: steel,
+            contact_model: ContactModel::LankaraniNikravesh,
+            restitution: 0.9,
+            c_f: 0.0,
+            mu_g: 0.0,
+            v0: 1e-4,
+            v1: 1e-3,
+            approach_floor: 1e-3,
+            motor_rpm: 5000.0,
+            gear_ratio: 1.0,
+            standoff: 0.0,
+            f_ins: Table::zero(),
+            f_wd: Table::zero(),
+            process_law: ProcessLaw::Regularized,
+            gravity: [0.0, -9.81],
+            driver: Driver::ConstantSpeed,
+        }
+    }
+
+    /// A preset by name.
+    pub fn preset(name: &str) -> Result<Self, ParamError> {
+        match name.trim() {
+            "paper" => Ok(Self::paper()),
+            "flores" => Ok(Self::flores()),
+            other => Err(ParamError::Invalid {
+                key: "preset".into(),
+                value: other.into(),
+                allowed: format!("one of {}", PRESETS.join(", ")),
+            }),
+        }
+    }
+
+    /// Bearing radius R_B = R_J + c, m.
+    pub fn rb(&self) -> f64 {
+        self.rj + self.clearance
+    }
+
+    /// Crank angular speed ω = 2π · motor_rpm / 60 / gear_ratio, rad/s.
+    pub fn omega(&self) -> f64 {
+        2.0 * std::f64::consts::PI * self.motor_rpm / 60.0 / self.gear_ratio
+    }
+
+    /// Crank period, s.
+    pub fn period(&self) -> f64 {
+        2.0 * std::f64::consts::PI / self.omega()
+    }
+
+    /// Name of the material pair (`custom` or `a/b` when they differ).
+    pub fn material_name(&self) -> String {
+        if self.journal.name == self.bearing.name {
+            self.journal.name.clone()
+        } else {
+            format!("{}/{}", self.journal.name, self.bearing.name)
+        }
+    }
+
+    /// Loads a parameter file: its `preset` (default `paper`) is the base,
+    /// then every other key in the file applies (material before E/ν).
+    pub fn from_toml_file(path: &Path) -> Result<Self, ParamError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ParamError::File {
+            file: path.display().to_string(),
+            msg: e.to_string(),
+        })?;
+        Self::from_toml_str(&text).map_err(|e| e.in_file(path))
+    }
+
+    /// Parses parameter-file text (see [`Params::from_toml_file`]).
+    pub fn from_toml_str(text: &str) -> Result<Self, ParamError> {
+        let table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| ParamError::File {
+                file: String::new(),
+                msg: e.to_string(),
+            })?;
+        let base = match table.get("preset") {
+            Some(toml::Value::String(s)) => Self::preset(s)?,
+            Some(v) => {
+                return Err(ParamError::Invalid {
+                    key: "preset".into(),
+                    value: v.to_string(),
+                    allowed: format!("a string, one of {}", PRESETS.join(", ")),
+                });
+            }
+            None => Self::paper(),
+        };
+        let mut p = base;
+        p.apply_table(&table)?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Applies every key of a TOML table except `preset` (materials first, so
+    /// that explicit E/ν keys override them).
+    pub fn apply_table(&mut self, table: &toml::Table) -> Result<(), ParamError> {
+        let rank = |k: &str| match k {
+            "material" => 0,
+            "journal_material" | "bearing_material" => 1,
+            _ => 2,
+        };
+        let mut entries: Vec<(&String, &toml::Value)> = table
+            .iter()
+            .filter(|(k, _)| k.as_str() != "preset")
+            .collect();
+        entries.sort_by_key(|(k, _)| rank(k));
+        for (k, v) in entries {
+            self.set(k, v)?;
+        }
+        Ok(())
+    }
+
+    /// Applies `key=value` overrides in order (value in TOML syntax, bare
+    /// words taken as strings), then validates the whole set.
+    pub fn apply_overrides<S: AsRef<str>>(&mut self, sets: &[S]) -> Result<(), ParamError> {
+        for s in sets {
+            let s = s.as_ref();
+            let (k, v) = s.split_once('=').ok_or_else(|| ParamError::Syntax {
+                text: s.to_string(),
+            })?;
+            self.set_str(k.trim(), v.trim())?;
+        }
+        self.validate()
+    }
+
+    /// Sets one key from its text form (TOML value syntax; a bare word is a string).
+    pub fn set_str(&mut self, key: &str, text: &str) -> Result<(), ParamError> {
+        let value = parse_value_text(text);
+        self.set(key, &value)
+    }
+
+    /// Sets one key, converting units and checking its range.
+    pub fn set(&mut self, key: &str, value: &toml::Value) -> Result<(), ParamError> {
+        let spec = spec(key).ok_or_else(|| ParamError::unknown(key))?;
+        let invalid = |v: String| ParamError::Invalid {
+            key: key.to_string(),
+            value: v,
+            allowed: spec.range.to_string(),
+        };
+        let num = || -> Result<f64, ParamError> {
+            let x = match value {
+                toml::Value::Float(f) => *f,
+                toml::Value::Integer(i) => *i as f64,
+                toml::Value::String(s) => s
+                    .trim()
+                    .parse::<f64>()
+                    .map_err(|_| invalid(value.to_string()))?,
+                other => return Err(invalid(other.to_string())),
+            };
+            if !x.is_finite() {
+                return Err(invalid(x.to_string()));
+            }
+            Ok(x)
+        };
+        let text = || -> Result<String, ParamError> {
+            match value {
+                toml::Value::String(s) => Ok(s.trim().to_string()),
+                other => Err(invalid(other.to_string())),
+            }
+        };
+        let check = |x: f64, ok: bool| -> Result<f64, ParamError> {
+            if ok { Ok(x) } else { Err(invalid(fmt_num(x))) }
+        };
+        match key {
+            "r_mm" => {
+                let x = num()?;
+                self.r = check(x, x > 0.0)? / 1e3
+            }
+            "l_mm" => {
+                let x = num()?;
+                self.l = check(x, x > 0.0)? / 1e3
+            }
+            "offset_mm" => self.offset = num()? / 1e3,
+            "m2_kg" => {
+                let x = num()?;
+                self.m2 = check(x, x >= 0.0)?
+            }
+            "lc2_mm" => {
+                let x = num()?;
+                self.lc2 = check(x, x >= 0.0)? / 1e3
+            }
+            "i2_kgm2" => {
+                let x = num()?;
+                self.i2 = check(x, x >= 0.0)?
+            }
+            "m3_kg" => {
+                let x = num()?;
+                self.m3 = check(x, x > 0.0)?
+            }
+            "lc3_mm" => {
+                let x = num()?;
+                self.lc3 = check(x, x >= 0.0)? / 1e3
+            }
+            "i3_kgm2" => {
+                let x = num()?;
+                self.i3 = check(x, x >= 0.0)?
+            }
+            "m4_kg" => {
+                let x = num()?;
+                self.m4 = check(x, x > 0.0)?
+            }
+            "rj_mm" => {
+                let x = num()?;
+                self.rj = check(x, x > 0.0)? / 1e3
+            }
+            "clearance_mm" => {
+                let x = num()?;
+                self.clearance = check(x, x >= 0.0)? / 1e3
+            }
+            "material" => {
+                let m = Material::by_name(&text()?).ok_or_else(|| invalid(value.to_string()))?;
+                self.journal = m.clone();
+                self.bearing = m;
+            }
+            "journal_material" => {
+                self.journal =
+                    Material::by_name(&text()?).ok_or_else(|| invalid(value.to_string()))?
+            }
+            "bearing_material" => {
+                self.bearing =
+                    Material::by_name(&text()?).ok_or_else(|| invalid(value.to_string()))?
+            }
+            "journal_e_gpa" => {
+                let x = num()?;
+                self.journal.e_pa = check(x, x > 0.0)? * 1e9;
+                self.journal.name = "custom".into();
+            }
+            "bearing_e_gpa" => {
+                let x = num()?;
+                self.bearing.e_pa = check(x, x > 0.0)? * 1e9;
+                self.bearing.name = "custom".into();
+            }
+            "journal_nu" => {
+                let x = num()?;
+                self.journal.nu = check(x, x > -1.0 && x < 0.5)?;
+                self.journal.name = "custom".into();
+            }
+            "bearing_nu" => {
+                let x = num()?;
+                self.bearing.nu = check(x, x > -1.0 && x < 0.5)?;
+                self.bearing.name = "custom".into();
+            }
+            "contact_model" => {
+                self.contact_model =
+                    ContactModel::parse(&text()?).ok_or_else(|| invalid(value.to_string()))?
+            }
+            "restitution" => {
+                let x = num()?;
+                self.restitution = check(x, x > 0.0 && x <= 1.0)?
+            }
+            "c_f" => {
+                let x = num()?;
+                self.c_f = check(x, x >= 0.0)?
+            }
+            "mu_g" => {
+                let x = num()?;
+                self.mu_g = check(x, (0.0..1.0).contains(&x))?
+            }
+            "friction_v0_mps" => {
+                let x = num()?;
+                self.v0 = check(x, x >= 0.0)?
+            }
+            "friction_v1_mps" => {
+                let x = num()?;
+                self.v1 = check(x, x > 0.0)?
+            }
+            "approach_velocity_floor_mps" => {
+                let x = num()?;
+                self.approach_floor = check(x, x > 0.0)?
+            }
+            "motor_rpm" => {
+                let x = num()?;
+                self.motor_rpm = check(x, x > 0.0)?
+            }
+            "gear_ratio" => {
+                let x = num()?;
+                self.gear_ratio = check(x, x > 0.0)?
+            }
+            "standoff_mm" => {
+                let x = num()?;
+                self.standoff = check(x, x >= 0.0)? / 1e3
+            }
+            "f_ins_table" | "f_wd_table" => {
+                let pts = pairs(value).ok_or_else(|| invalid(value.to_string()))?;
+                let t = Table::from_mm(&pts).map_err(|msg| ParamError::Invalid {
+                    key: key.to_string(),
+                    value: format!("{value} ({msg})"),
+                    allowed: spec.range.to_string(),
+                })?;
+                if key == "f_ins_table" {
+                    self.f_ins = t
+                } else {
+                    self.f_wd = t
+                }
+            }
+            "process_law" => {
+                self.process_law = match text()?.as_str() {
+                    "regularized" => ProcessLaw::Regularized,
+                    "stick" => ProcessLaw::Stick,
+                    _ => return Err(invalid(value.to_string())),
+                }
+            }
+            "gravity_mps2" => {
+                let v = match value {
+                    toml::Value::Array(a) if a.len() == 2 => {
+                        let mut g = [0.0; 2];
+                        for (i, x) in a.iter().enumerate() {
+                            g[i] = match x {
+                                toml::Value::Float(f) if f.is_finite() => *f,
+                                toml::Value::Integer(n) => *n as f64,
+                                _ => return Err(invalid(value.to_string())),
+                            };
+                        }
+                        g
+                    }
+                    _ => return Err(invalid(value.to_string())),
+                };
+                self.gravity = v
+            }
+            "driver" => {
+                self.driver = match text()?.as_str() {
+                    "constant_speed" => Driver::ConstantSpeed,
+                    "motor" => Driver::Motor,
+                    _ => return Err(invalid(value.to_string())),
+                }
+            }
+            _ => return Err(ParamError::unknown(key)),
+        }
+        Ok(())
+    }
+
+    /// The value of a key in its user units.
+    pub fn get(&self, key: &str) -> Option<ParamValue> {
+        use ParamValue::*;
+        Some(match key {
+            "r_mm" => Number(self.r * 1e3),
+            "l_mm" => Number(self.l * 1e3),
+            "offset_mm" => Number(self.offset * 1e3),
+            "m2_kg" => Number(self.m2),
+            "lc2_mm" => Number(self.lc2 * 1e3),
+            "i2_kgm2" => Number(self.i2),
+            "m3_kg" => Number(self.m3),
+            "lc3_mm" => Number(self.lc3 * 1e3),
+            "i3_kgm2" => Number(self.i3),
+            "m4_kg" => Number(self.m4),
+            "rj_mm" => Number(self.rj * 1e3),
+            "clearance_mm" => Number(self.clearance * 1e3),
+            "material" => Text(self.material_name()),
+            "journal_material" => Text(self.journal.name.clone()),
+            "bearing_material" => Text(self.bearing.name.clone()),
+            "journal_e_gpa" => Number(self.journal.e_pa / 1e9),
+            "bearing_e_gpa" => Number(self.bearing.e_pa / 1e9),
+            "journal_nu" => Number(self.journal.nu),
+            "bearing_nu" => Number(self.bearing.nu),
+            "contact_model" => Text(self.contact_model.name().into()),
+            "restitution" => Number(self.restitution),
+            "c_f" => Number(self.c_f),
+            "mu_g" => Number(self.mu_g),
+            "friction_v0_mps" => Number(self.v0),
+            "friction_v1_mps" => Number(self.v1),
+            "approach_velocity_floor_mps" => Number(self.approach_floor),
+            "motor_rpm" => Number(self.motor_rpm),
+            "gear_ratio" => Number(self.gear_ratio),
+            "standoff_mm" => Number(self.standoff * 1e3),
+            "f_ins_table" => Pairs(self.f_ins.to_mm()),
+            "f_wd_table" => Pairs(self.f_wd.to_mm()),
+            "process_law" => Text(self.process_law.name().into()),
+            "gravity_mps2" => Vector(self.gravity.to_vec()),
+            "driver" => Text(self.driver.name().into()),
+            _ => return None,
+        })
+    }
+
+    /// Checks the relations between parameters (each key's own range is
+    /// checked when it is set).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        // Re-check every key's range (a struct may be built in code).
+        for s in PARAM_SPECS {
+            if matches!(s.key, "material" | "journal_material" | "bearing_material") {
+                continue; // names, possibly `custom`; E and ν are checked below
+            }
+            if let Some(v) = self.get(s.key) {
+                let mut copy = self.clone();
+                copy.set(s.key, &v.to_toml())?;
+            }
+        }
+        if self.l <= self.r + self.offset.abs() {
+            return Err(ParamError::Relation {
+                keys: "l_mm, r_mm, offset_mm".into(),
+                msg: format!(
+                    "l_mm = {} must exceed r_mm + |offset_mm| = {} (the crank could not turn a full revolution)",
+                    fmt_num(self.l * 1e3),
+                    fmt_num((self.r + self.offset.abs()) * 1e3)
+                ),
+            });
+        }
+        if self.lc3 > self.l {
+            return Err(ParamError::Relation {
+                keys: "lc3_mm, l_mm".into(),
+                msg: format!(
+                    "lc3_mm = {} must lie on the rod (0 … l_mm = {})",
+                    fmt_num(self.lc3 * 1e3),
+                    fmt_num(self.l * 1e3)
+                ),
+            });
+        }
+        if self.i3 + self.m3 * self.lc3 * self.lc3 <= 0.0 {
+            return Err(ParamError::Relation {
+                keys: "i3_kgm2, m3_kg, lc3_mm".into(),
+                msg: "the rod's inertia about the crank pin, i3 + m3·lc3², must be positive".into(),
+            });
+        }
+        if self.v1 <= self.v0 {
+            return Err(ParamError::Relation {
+                keys: "friction_v0_mps, friction_v1_mps".into(),
+                msg: format!(
+                    "friction_v1_mps = {} must exceed friction_v0_mps = {}",
+                    fmt_num(self.v1),
+                    fmt_num(self.v0)
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The whole parameter set as a parameter file (loadable by
+    /// [`Params::from_toml_str`]).
+    pub fn to_toml(&self) -> String {
+        let mut out = String::new();
+        out.push_str(&format!("preset = \"{}\"\n", self.preset));
+        for s in PARAM_SPECS {
+            // Materials by name; E and ν only for a body whose material is custom.
+            let skip = match s.key {
+                "material" => {
+                    self.journal.name != self.bearing.name || self.journal.name == "custom"
+                }
+                "journal_material" => {
+                    self.journal.name == self.bearing.name || self.journal.name == "custom"
+                }
+                "bearing_material" => {
+                    self.journal.name == self.bearing.name || self.bearing.name == "custom"
+                }
+                "journal_e_gpa" | "journal_nu" => self.journal.name != "custom",
+                "bearing_e_gpa" | "bearing_nu" => self.bearing.name != "custom",
+                _ => false,
+            };
+            if skip {
+                continue;
+            }
+            if let Some(v) = self.get(s.key) {
+                out.push_str(&format!("{} = {}\n", s.key, v.to_toml()));
+            }
+        }
+        out
+    }
+
+    /// Every key with its current value, for listings and the Model pane.
+    pub fn listing(&self) -> Vec<(&'static ParamSpec, ParamValue)> {
+        PARAM_SPECS
+            .iter()
+            .filter_map(|s| self.get(s.key).map(|v| (s, v)))
+            .collect()
+    }
+}
+
+/// Parses the text of a `--set` value: TOML value syntax, or a bare word as a string.
+pub fn parse_value_text(text: &str) -> toml::Value {
+    let doc = format!("v = {text}");
+    match doc.parse::<toml::Table>() {
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or_else(|| toml::Value::String(text.to_string())),
+        Err(_) => toml::Value::String(text.to_string()),
+    }
+}
+
+fn pairs(value: &toml::Value) -> Option<Vec<(f64, f64)>> {
+    let num = |v: &toml::Value| match v {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    };
+    match value {
+        toml::Value::Array(rows) => rows
+            .iter()
+            .map(|row| match row {
+                toml::Value::Array(p) if p.len() == 2 => Some((num(&p[0])?, num(&p[1])?)),
+                _ => None,
+            })
+            .collect(),
+        _ => None,
+    }
+}
+
+fn fmt_num(x: f64) -> String {
+    format!("{x}")
+}
+
+/// A parameter value in user units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ParamValue {
+    Number(f64),
+    Text(String),
+    Pairs(Vec<(f64, f64)>),
+    Vector(Vec<f64>),
+}
+
+impl ParamValue {
+    pub fn to_toml(&self) -> toml::Value {
+        match self {
+            ParamValue::Number(x) => toml::Value::Float(*x),
+            ParamValue::Text(s) => toml::Value::String(s.clone()),
+            ParamValue::Pairs(p) => toml::Value::Array(
+                p.iter()
+                    .map(|(a, b)| {
+                        toml::Value::Array(vec![toml::Value::Float(*a), toml::Value::Float(*b)])
+                    })
+                    .collect(),
+            ),
+            ParamValue::Vector(v) => {
+                toml::Value::Array(v.iter().map(|x| toml::Value::Float(*x)).collect())
+            }
+        }
+    }
+}
+
+impl fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ParamValue::Number(x) => write!(f, "{x}"),
+            ParamValue::Text(s) => write!(f, "{s}"),
+            ParamValue::Pairs(p) => {
+                let items: Vec<String> = p.iter().map(|(a, b)| format!("[{a}, {b}]")).collect();
+                write!(f, "[{}]", items.join(", "))
+            }
+            ParamValue::Vector(v) => {
+                let items: Vec<String> = v.iter().map(|a| format!("{a}")).collect();
+                write!(f, "[{}]", items.join(", "))
+            }
+        }
+    }
+}
+
+/// One user-visible parameter key.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ParamSpec {
+    pub key: &'static str,
+    /// What it is (with the symbol of model.md).
+    pub help: &'static str,
+    /// Allowed values, in words.
+    pub range: &'static str,
+    /// Group for listings: geometry, masses, joint, contact, friction, drive, process, environment.
+    pub group: &'static str,
+}
+
+const fn ps(
+    key: &'static str,
+    help: &'static str,
+    range: &'static str,
+    group: &'static str,
+) -> ParamSpec {
+    ParamSpec {
+        key,
+        help,
+        range,
+        group,
+    }
+}
+
+/// Every parameter key, in listing order.
+pub const PARAM_SPECS: &[ParamSpec] = &[
+    ps("r_mm", "crank length r", "> 0 mm", "geometry"),
+    ps(
+        "l_mm",
+        "connecting rod length l",
+        "> r_mm + |offset_mm| (mm)",
+        "geometry",
+    ),
+    ps(
+        "offset_mm",
+        "offset of the pin bar's line of motion",
+        "any mm, |offset| < l − r",
+        "geometry",
+    ),
+    ps("m2_kg", "crank mass m2", "≥ 0 kg", "masses"),
+    ps("lc2_mm", "crank centroid distance Lc2", "≥ 0 mm", "masses"),
+    ps(
+        "i2_kgm2",
+        "crank inertia I2 about its centroid",
+        "≥ 0 kg m²",
+        "masses",
+    ),
+    ps("m3_kg", "connecting rod mass m3", "> 0 kg", "masses"),
+    ps(
+        "lc3_mm",
+        "rod centroid distance Lc3 from the crank pin",
+        "0 … l_mm",
+        "masses",
+    ),
+    ps(
+        "i3_kgm2",
+        "rod inertia I3 about its centroid",
+        "≥ 0 kg m²",
+        "masses",
+    ),
+    ps("m4_kg", "pin bar mass m4", "> 0 kg", "masses"),
+    ps(
+        "rj_mm",
+        "journal radius R_J (bearing R_B = R_J + c)",
+        "> 0 mm",
+        "joint",
+    ),
+    ps(
+        "clearance_mm",
+        "radial clearance c of the rod–pin-bar joint",
+        "≥ 0 mm (0 = ideal joint)",
+        "joint",
+    ),
+    ps(
+        "material",
+        "material of journal and bearing",
+        "alloy_steel, stainless_steel, aluminium, copper, tungsten_carbide",
+        "joint",
+    ),
+    ps(
+        "journal_material",
+        "journal material",
+        "alloy_steel, stainless_steel, aluminium, copper, tungsten_carbide",
+        "joint",
+    ),
+    ps(
+        "bearing_material",
+        "bearing material",
+        "alloy_steel, stainless_steel, aluminium, copper, tungsten_carbide",
+        "joint",
+    ),
+    ps(
+        "journal_e_gpa",
+        "journal Young's modulus E",
+        "> 0 GPa",
+        "joint",
+    ),
+    ps(
+        "journal_nu",
+        "journal Poisson's ratio ν",
+        "−1 < ν < 0.5",
+        "joint",
+    ),
+    ps(
+        "bearing_e_gpa",
+        "bearing Young's modulus E",
+        "> 0 GPa",
+        "joint",
+    ),
+    ps(
+        "bearing_nu",
+        "bearing Poisson's ratio ν",
+        "−1 < ν < 0.5",
+        "joint",
+    ),
+    ps(
+        "contact_model",
+        "contact force model",
+        "lankarani_nikravesh, flores, hunt_crossley, hertz",
+        "contact",
+    ),
+    ps(
+        "restitution",
+        "coefficient of restitution ce",
+        "0 < ce ≤ 1",
+        "contact",
+    ),
+    ps(
+        "approach_velocity_floor_mps",
+        "floor on the onset approach velocity δ̇⁻",
+        "> 0 m/s",
+        "contact",
+    ),
+    ps("c_f", "joint friction coefficient c_f", "≥ 0", "friction"),
+    ps(
+        "mu_g",
+        "guide friction coefficient μ_g",
+        "0 ≤ μ_g < 1",
+        "friction",
+    ),
+    ps(
+        "friction_v0_mps",
+        "friction smoothing: c_d = 0 below v0",
+        "≥ 0 m/s",
+        "friction",
+    ),
+    ps(
+        "friction_v1_mps",
+        "friction smoothing: c_d = 1 above v1",
+        "> friction_v0_mps (m/s)",
+        "friction",
+    ),
+    ps("motor_rpm", "motor speed", "> 0 rev/min", "drive"),
+    ps(
+        "gear_ratio",
+        "motor revolutions per crank revolution",
+        "> 0",
+        "drive",
+    ),
+    ps("driver", "crank driver", "constant_speed, motor", "drive"),
+    ps(
+        "standoff_mm",
+        "stroke at which the pin meets the part",
+        "≥ 0 mm",
+        "process",
+    ),
+    ps(
+        "f_ins_table",
+        "insertion force against depth, [[mm, N], …]",
+        "depths ≥ 0 strictly increasing, forces ≥ 0",
+        "process",
+    ),
+    ps(
+        "f_wd_table",
+        "withdrawal force against depth, [[mm, N], …]",
+        "depths ≥ 0 strictly increasing, forces ≥ 0",
+        "process",
+    ),
+    ps(
+        "process_law",
+        "process load law",
+        "regularized, stick",
+        "process",
+    ),
+    ps(
+        "gravity_mps2",
+        "gravity vector [x, y] (x = insertion direction)",
+        "two finite numbers, m/s²",
+        "environment",
+    ),
+];
+
+/// The spec of a key.
+pub fn spec(key: &str) -> Option<&'static ParamSpec> {
+    PARAM_SPECS.iter().find(|s| s.key == key)
+}
+
+/// Errors in parameters: each names the key and the allowed range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    #[error("unknown parameter `{key}`{}", suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default())]
+    UnknownKey {
+        key: String,
+        suggestion: Option<String>,
+    },
+    #[error("invalid value for `{key}`: {value} (allowed: {allowed})")]
+    Invalid {
+        key: String,
+        value: String,
+        allowed: String,
+    },
+    #[error("inconsistent parameters ({keys}): {msg}")]
+    Relation { keys: String, msg: String },
+    #[error("`{text}` is not of the form key=value")]
+    Syntax { text: String },
+    #[error("parameter file {file}: {msg}")]
+    File { file: String, msg: String },
+    #[error("parameter file {file}: {inner}")]
+    InFile {
+        file: String,
+        inner: Box<ParamError>,
+    },
+}
+
+impl ParamError {
+    fn unknown(key: &str) -> Self {
+        let suggestion = PARAM_SPECS
+            .iter()
+            .map(|s| (edit_distance(key, s.key), s.key))
+            .filter(|(d, _)| *d <= 3)
+            .min()
+            .map(|(_, k)| k.to_string())
+            .or_else(|| {
+                // A key without its unit suffix (`clearance` for `clearance_mm`).
+                PARAM_SPECS
+                    .iter()
+                    .find(|s| s.key.starts_with(key) && key.len() >= 2)
+                    .map(|s| s.key.to_string())
+            });
+        ParamError::UnknownKey {
+            key: key.to_string(),
+            suggestion,
+        }
+    }
+
+    fn in_file(self, path: &Path) -> Self {
+        match self {
+            ParamError::File { msg, .. } => ParamError::File {
+                file: path.display().to_string(),
+                msg,
+            },
+            other => ParamError::InFile {
+                file: path.display().to_string(),
+                inner: Box::new(other),
+            },
+        }
+    }
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut cur = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let sub = prev[j - 1] + usize::from(a[i - 1] != b[j - 1]);
+            cur[j] = sub.min(prev[j] + 1).min(cur[j - 1] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_are_valid_and_roundtrip_through_toml() {
+        for name in PRESETS {
+            let p = Params::preset(name).unwrap();
+            p.validate().unwrap();
+            let text = p.to_toml();
+            let q = Params::from_toml_str(&text).unwrap();
+            assert_eq!(p, q, "{name}:\n{text}");
+        }
+    }
+
+    #[test]
+    fn flores_stiffness_inputs() {
+        let p = Params::flores();
+        assert!((p.rb() - 10.0e-3).abs() < 1e-15);
+        assert!((p.omega() - 523.598_775_598).abs() < 1e-6);
+        assert!((p.contact_model.damping_factor(p.restitution) - 0.1425).abs() < 1e-15);
+    }
+
+    #[test]
+    fn overrides_apply_in_units() {
+        let mut p = Params::paper();
+        p.apply_overrides(&[
+            "clearance_mm=0.3",
+            "motor_rpm = 1500",
+            "material=copper",
+            "m4_kg=0.1",
+        ])
+        .unwrap();
+        assert!((p.clearance - 0.3e-3).abs() < 1e-15);
+        assert_eq!(p.motor_rpm, 1500.0);
+        assert_eq!(p.journal.name, "copper");
+        assert_eq!(p.bearing.e_pa, 117e9);
+        p.apply_overrides(&["f_ins_table=[[0,0],[1,10]]", "gravity_mps2=[0, -9.81]"])
+            .unwrap();
+        assert_eq!(p.f_ins.eval(0.5e-3), 5.0);
+        assert_eq!(p.gravity, [0.0, -9.81]);
+    }
+
+    #[test]
+    fn invalid_values_name_key_and_range() {
+        let cases: &[(&str, &str)] = &[
+            ("clearance_mm=-0.1", "clearance_mm"),
+            ("m4_kg=-1", "m4_kg"),
+            ("m3_kg=0", "m3_kg"),
+            ("rj_mm=0", "rj_mm"),
+            ("journal_e_gpa=0", "journal_e_gpa"),
+            ("bearing_nu=0.5", "bearing_nu"),
+            ("journal_nu=-1", "journal_nu"),
+            ("motor_rpm=0", "motor_rpm"),
+            ("motor_rpm=-5", "motor_rpm"),
+            ("material=unobtainium", "material"),
+            ("f_ins_table=[[0,0],[0.5,3],[0.4,5]]", "f_ins_table"),
+            ("contact_model=magic", "contact_model"),
+            ("restitution=0", "restitution"),
+            ("motor_rpm=fast", "motor_rpm"),
+        ];
+        for (set, key) in cases {
+            let mut p = Params::paper();
+            let err = p.apply_overrides(&[*set]).unwrap_err();
+            let msg = err.to_string();
+            assert!(msg.contains(key), "{set}: {msg}");
+            assert!(msg.contains("allowed"), "{set}: {msg}");
+        }
+    }
+
+    #[test]
+    fn relations_and_unknown_keys() {
+        let mut p = Params::paper();
+        let err = p.apply_overrides(&["l_mm=7"]).unwrap_err().to_string();
+        assert!(err.contains("l_mm") && err.contains("r_mm"), "{err}");
+        let mut p = Params::paper();
+        let err = p
+            .apply_overrides(&["offset_mm=40"])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("offset_mm"), "{err}");
+        let mut p = Params::paper();
+        let err = p
+            .apply_overrides(&["clearance=0.2"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("unknown parameter `clearance`") && err.contains("clearance_mm"),
+            "{err}"
+        );
+        let mut p = Params::paper();
+        assert!(p.apply_overrides(&["clearance_mm"]).is_err());
+    }
+
+    #[test]
+    fn file_with_preset_and_explicit_moduli() {
+        let text = "preset = \"flores\"\njournal_e_gpa = 100\nmaterial = \"copper\"\nclearance_mm = 0.25\n";
+        let p = Params::from_toml_str(text).unwrap();
+        assert_eq!(p.preset, "flores");
+        // material applies first, then the explicit modulus
+        assert_eq!(p.journal.e_pa, 100e9);
+        assert_eq!(p.journal.name, "custom");
+        assert_eq!(p.bearing.name, "copper");
+        assert!((p.rb() - 9.75e-3).abs() < 1e-15);
+        let err = Params::from_toml_str("preset = \"nope\"")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("preset"), "{err}");
+        let err = Params::from_toml_str("m4_kg = \n").unwrap_err().to_string();
+        assert!(err.contains("parameter file"), "{err}");
+        // A custom material survives a round trip.
+        let q = Params::from_toml_str(&p.to_toml()).unwrap();
+        assert_eq!(p, q);
+    }
+}
