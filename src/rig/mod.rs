@@ -12,6 +12,7 @@
 //! [`report`] (findings and status), [`load`] (the orchestration).
 
 pub mod channel_map;
+pub mod cycles;
 pub mod decode;
 pub mod error;
 pub mod images;
@@ -21,8 +22,10 @@ pub mod mcap_read;
 pub mod meta;
 pub mod report;
 pub mod signals;
+pub mod summary;
 
 pub use channel_map::{ChannelMap, SignalKind, SignalSource};
+pub use cycles::{Cycle, CycleOptions, CycleSet, analyse};
 pub use error::LogError;
 pub use images::{LogImage, read_images};
 pub use load::{ImageRef, LoadOptions, LogAttachment, RigLog, Signals, load, load_source};
