@@ -124,6 +124,9 @@ pub struct SensorOffsets {
     /// Fitted tare line at the log's start and end (N) and its drift (N/s).
     pub force_tare_start_n: Option<f64>,
     pub force_tare_end_n: Option<f64>,
+    /// Standard uncertainties of the fitted tare at the start and the end (N).
+    pub force_tare_start_sigma_n: Option<f64>,
+    pub force_tare_end_sigma_n: Option<f64>,
     pub force_tare_drift_n_per_s: Option<f64>,
     pub force_tare_drift_sigma: Option<f64>,
 }
@@ -532,8 +535,32 @@ fn mean_std(x: &[f64]) -> (f64, f64) {
     (m, s)
 }
 
-/// Least-squares line y = a + b·x: (a, b, σ_a, σ_b).
-fn line_fit(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
+/// A least-squares line y = a + b·x with what is needed for its uncertainty.
+#[derive(Debug, Clone, Copy)]
+struct LineFit {
+    a: f64,
+    b: f64,
+    /// Residual variance, number of points, mean of x, Σ(x − x̄)².
+    s2: f64,
+    n: f64,
+    mx: f64,
+    sxx: f64,
+}
+
+impl LineFit {
+    fn at(&self, x: f64) -> f64 {
+        self.a + self.b * x
+    }
+    /// Standard uncertainty of the fitted line at x.
+    fn sigma_at(&self, x: f64) -> f64 {
+        (self.s2 * (1.0 / self.n + (x - self.mx).powi(2) / self.sxx)).sqrt()
+    }
+    fn sigma_b(&self) -> f64 {
+        (self.s2 / self.sxx).sqrt()
+    }
+}
+
+fn line_fit(x: &[f64], y: &[f64]) -> Option<LineFit> {
     let n = x.len();
     if n < 3 {
         return None;
@@ -552,10 +579,14 @@ fn line_fit(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
         .zip(y)
         .map(|(a2, b2)| (b2 - a - b * a2).powi(2))
         .sum();
-    let s2 = res / (n - 2) as f64;
-    let sb = (s2 / sxx).sqrt();
-    let sa = (s2 * (1.0 / n as f64 + mx * mx / sxx)).sqrt();
-    Some((a, b, sa, sb))
+    Some(LineFit {
+        a,
+        b,
+        s2: res / (n - 2) as f64,
+        n: n as f64,
+        mx,
+        sxx,
+    })
 }
 
 /// Motor-speed statistics of one cycle: mean, std, min, max, first-harmonic amplitude (relative).
@@ -711,6 +742,8 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
             force_tare_n: unavailable("force tare", "N", "no force channel"),
             force_tare_start_n: None,
             force_tare_end_n: None,
+            force_tare_start_sigma_n: None,
+            force_tare_end_sigma_n: None,
             force_tare_drift_n_per_s: None,
             force_tare_drift_sigma: None,
         },
@@ -1248,12 +1281,14 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
             systematic: None,
             note: String::new(),
         };
-        if let Some((a, b, _, sb)) = fit {
-            let at = |t: Option<i64>| t.map(|t| a + b * ((t - t_ref) as f64 * 1e-9));
-            set.offsets.force_tare_start_n = at(log.log_start_ns);
-            set.offsets.force_tare_end_n = at(log.log_end_ns);
-            set.offsets.force_tare_drift_n_per_s = Some(b);
-            set.offsets.force_tare_drift_sigma = Some(sb);
+        if let Some(lf) = fit {
+            let x = |t: Option<i64>| t.map(|t| (t - t_ref) as f64 * 1e-9);
+            set.offsets.force_tare_start_n = x(log.log_start_ns).map(|x| lf.at(x));
+            set.offsets.force_tare_end_n = x(log.log_end_ns).map(|x| lf.at(x));
+            set.offsets.force_tare_start_sigma_n = x(log.log_start_ns).map(|x| lf.sigma_at(x));
+            set.offsets.force_tare_end_sigma_n = x(log.log_end_ns).map(|x| lf.sigma_at(x));
+            set.offsets.force_tare_drift_n_per_s = Some(lf.b);
+            set.offsets.force_tare_drift_sigma = Some(lf.sigma_b());
         }
         let est_text = match (ft.estimate, ft.sigma) {
             (Some(e), Some(s)) => format!(
@@ -1289,7 +1324,7 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
         } else if let Some(e) = ft.estimate {
             ft.applied = e;
             ft.source = ValueSource::Estimated;
-            tare_line = fit.map(|(a, b, _, _)| (a, b));
+            tare_line = fit.map(|lf| (lf.a, lf.b));
             ft.note = format!(
                 "no force_tare_n in the metadata: the fitted tare line is subtracted cycle by cycle; estimate {est_text}"
             );
