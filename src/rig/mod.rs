@@ -23,6 +23,7 @@ pub mod meta;
 pub mod report;
 pub mod signals;
 pub mod summary;
+pub mod synth;
 
 pub use channel_map::{ChannelMap, SignalKind, SignalSource};
 pub use cycles::{Cycle, CycleOptions, CycleSet, analyse};
