@@ -881,8 +881,12 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
                     })
                     .collect();
                 let (_, s) = mean_std(&parts);
+                let quantum = set
+                    .crank
+                    .encoder_counts
+                    .map_or(0.0, |n| TAU / n as f64 / 12f64.sqrt());
                 ao.estimate = Some(wrap_pi(phi));
-                ao.sigma = Some(s / (parts.len().max(1) as f64).sqrt());
+                ao.sigma = Some((s / (parts.len().max(1) as f64).sqrt()).max(quantum));
                 est_method = "from the displacement signal (phase of the best fit to the ideal stroke; biased by the sensor lag, ω·τ)";
             }
         }

@@ -97,7 +97,7 @@ impl Truth for IdealTruth {
 }
 
 /// A window with no samples of one signal.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Dropout {
     pub signal: SignalKind,
     /// Seconds from the log start.
@@ -106,7 +106,7 @@ pub struct Dropout {
 }
 
 /// Everything about a synthetic run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct SynthConfig {
     /// log_time of the log start (ns since the Unix epoch).
     pub start_ns: u64,
