@@ -42,6 +42,7 @@ use super::report::{Finding, FindingCode, Place, Severity, fmt_time};
 use super::signals::Signal;
 use crate::model::Params;
 use crate::model::kinematics::Geometry;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::f64::consts::{PI, TAU};
 
@@ -365,7 +366,27 @@ impl Crank {
     /// θ2 at time t (linear interpolation; None outside the samples or across
     /// a spindle hole longer than 5 nominal intervals).
     pub fn at(&self, t: i64) -> Option<f64> {
-        let i = self.t_ns.partition_point(|&x| x < t);
+        let mut h = 0;
+        self.at_from(t, &mut h)
+    }
+
+    /// [`Crank::at`] for increasing times: `hint` remembers where the last
+    /// query ended so a sweep costs O(n) instead of O(n log n).
+    pub fn at_from(&self, t: i64, hint: &mut usize) -> Option<f64> {
+        let n = self.t_ns.len();
+        let mut i = (*hint).min(n);
+        if i > 0 && self.t_ns[i - 1] >= t {
+            i = self.t_ns.partition_point(|&x| x < t);
+        } else {
+            let stop = (i + 16).min(n);
+            while i < stop && self.t_ns[i] < t {
+                i += 1;
+            }
+            if i == stop && i < n && self.t_ns[i] < t {
+                i += self.t_ns[i..].partition_point(|&x| x < t);
+            }
+        }
+        *hint = i;
         if i < self.t_ns.len() && self.t_ns[i] == t {
             return Some(self.theta[i]);
         }
@@ -373,7 +394,7 @@ impl Crank {
             return None;
         }
         let (t0, t1) = (self.t_ns[i - 1], self.t_ns[i]);
-        if t1 - t0 > 5 * self.dt_ns.max(1) {
+        if t1 - t0 > self.dt_ns.max(1).saturating_mul(5) {
             return None;
         }
         let w = (t - t0) as f64 / (t1 - t0) as f64;
@@ -386,7 +407,7 @@ impl Crank {
         for i in 1..self.theta.len() {
             let (a, b) = (self.theta[i - 1] - tdc, self.theta[i] - tdc);
             let (na, nb) = ((a / TAU).floor(), (b / TAU).floor());
-            if nb > na && self.t_ns[i] - self.t_ns[i - 1] <= 5 * self.dt_ns.max(1) {
+            if nb > na && self.t_ns[i] - self.t_ns[i - 1] <= self.dt_ns.max(1).saturating_mul(5) {
                 // One crossing per revolution passed (more only across holes, excluded above).
                 for n in (na as i64 + 1)..=(nb as i64) {
                     let target = n as f64 * TAU;
@@ -477,11 +498,12 @@ fn placed(
     margin: f64,
 ) -> Vec<(f64, i64, f64)> {
     let pad = (t1 - t0) / 4;
-    let i0 = sig.t_ns.partition_point(|&t| t < t0 - pad);
-    let i1 = sig.t_ns.partition_point(|&t| t <= t1 + pad);
+    let i0 = sig.t_ns.partition_point(|&t| t < t0.saturating_sub(pad));
+    let i1 = sig.t_ns.partition_point(|&t| t <= t1.saturating_add(pad));
     let mut pts = Vec::with_capacity(i1.saturating_sub(i0));
+    let mut hint = 0;
     for i in i0..i1 {
-        if let Some(th) = crank.at(sig.t_ns[i]) {
+        if let Some(th) = crank.at_from(sig.t_ns[i], &mut hint) {
             let phi = th - theta_tdc;
             if (-margin..=TAU + margin).contains(&phi) {
                 pts.push((phi, sig.t_ns[i], sig.values[i]));
@@ -1069,94 +1091,108 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
     let margin = 5f64.to_radians();
     let tol = opts.mark_tolerance_deg;
     let off_part: Vec<bool> = ideal.iter().map(|&s| s < standoff_mm - 1.0).collect();
-    let mut raw_disp: Vec<Vec<f64>> = Vec::new();
-    let mut raw_force: Vec<Vec<f64>> = Vec::new();
-    let mut mismatched: Vec<(u64, f64, i64)> = Vec::new();
-    for b in &bounds {
-        let dur = (b.t1 - b.t0) as f64 * 1e-9;
-        let omega = TAU / dur;
-        let grid_of = |sig: Option<&Signal>, dt: i64| -> Vec<f64> {
-            match sig {
-                None => Vec::new(),
-                Some(s) => {
-                    let pts: Vec<(f64, f64)> = placed(s, &crank, b.t0, b.t1, b.theta_tdc, margin)
-                        .into_iter()
-                        .map(|(p, _, v)| (p, v))
-                        .collect();
-                    to_grid(&pts, n, 2.5 * omega * dt as f64 * 1e-9)
+    // Cycles are independent: resample them in parallel.
+    let per_cycle: Vec<(Vec<f64>, Vec<f64>, Cycle)> = bounds
+        .par_iter()
+        .map(|b| {
+            let dur = (b.t1 - b.t0) as f64 * 1e-9;
+            let omega = TAU / dur;
+            let grid_of = |sig: Option<&Signal>, dt: i64| -> Vec<f64> {
+                match sig {
+                    None => Vec::new(),
+                    Some(s) => {
+                        let pts: Vec<(f64, f64)> =
+                            placed(s, &crank, b.t0, b.t1, b.theta_tdc, margin)
+                                .into_iter()
+                                .map(|(p, _, v)| (p, v))
+                                .collect();
+                        to_grid(&pts, n, 2.5 * omega * dt as f64 * 1e-9)
+                    }
                 }
-            }
-        };
-        raw_disp.push(grid_of(disp, disp_dt));
-        raw_force.push(grid_of(force, force_dt));
-        // Motor speed over the cycle.
-        let sp: Vec<(f64, f64)> = match speed {
-            Some(s) => {
-                let i0 = s.t_ns.partition_point(|&t| t < b.t0);
-                let i1 = s.t_ns.partition_point(|&t| t < b.t1);
-                (i0..i1)
-                    .filter_map(|i| {
-                        crank
-                            .at(s.t_ns[i])
-                            .map(|th| (th - b.theta_tdc, s.values[i]))
-                    })
-                    .collect()
-            }
-            None => {
-                let i0 = crank.t_ns.partition_point(|&t| t < b.t0).max(1);
-                let i1 = crank
-                    .t_ns
-                    .partition_point(|&t| t < b.t1)
-                    .min(crank.t_ns.len().saturating_sub(1));
-                (i0..i1)
-                    .filter_map(|i| {
-                        let dt = (crank.t_ns[i + 1] - crank.t_ns[i - 1]) as f64 * 1e-9;
-                        (dt > 0.0).then(|| {
-                            let w = (crank.theta[i + 1] - crank.theta[i - 1]) / dt;
-                            (crank.theta[i] - b.theta_tdc, w * 60.0 / TAU * gear)
+            };
+            let gd = grid_of(disp, disp_dt);
+            let gf = grid_of(force, force_dt);
+            // Motor speed over the cycle.
+            let sp: Vec<(f64, f64)> = match speed {
+                Some(s) => {
+                    let i0 = s.t_ns.partition_point(|&t| t < b.t0);
+                    let i1 = s.t_ns.partition_point(|&t| t < b.t1);
+                    let mut hint = 0;
+                    (i0..i1)
+                        .filter_map(|i| {
+                            crank
+                                .at_from(s.t_ns[i], &mut hint)
+                                .map(|th| (th - b.theta_tdc, s.values[i]))
                         })
-                    })
-                    .collect()
-            }
-        };
-        let (m, s, mn, mx, h) = speed_stats(&sp);
-        let worst_mismatch = match (b.mismatch_deg, b.mismatch_end_deg) {
-            (Some(a), Some(e)) => Some(if a.abs() >= e.abs() { a } else { e }),
-            (a, e) => a.or(e),
-        };
-        let usable = worst_mismatch.is_none_or(|d| d.abs() <= tol);
-        if let Some(d) = worst_mismatch.filter(|d| d.abs() > tol) {
-            mismatched.push((b.index, d, b.t0));
-        }
-        set.cycles.push(Cycle {
-            index: b.index,
-            t_start_ns: b.t0,
-            t_end_ns: b.t1,
-            duration_s: dur,
-            crank_rpm: 60.0 / dur,
-            motor_rpm_mean: m,
-            motor_rpm_std: s,
-            motor_rpm_min: mn,
-            motor_rpm_max: mx,
-            ripple_rms: s / m,
-            ripple_half_p2p: (mx - mn) / (2.0 * m),
-            ripple_first_harmonic: h,
-            mark_mismatch_deg: worst_mismatch,
-            usable,
-            stroke_mm: Vec::new(),
-            force_n: Vec::new(),
-            stroke_coverage: 0.0,
-            force_coverage: 0.0,
-            stroke_max_mm: f64::NAN,
-            stroke_min_mm: f64::NAN,
-            depth_mm: f64::NAN,
-            peak_force_n: f64::NAN,
-            stroke_err_tdc_mm: f64::NAN,
-            stroke_err_bdc_mm: f64::NAN,
-            stroke_dev_rms_mm: f64::NAN,
-            stroke_dev_max_mm: f64::NAN,
-        });
+                        .collect()
+                }
+                None => {
+                    let i0 = crank.t_ns.partition_point(|&t| t < b.t0).max(1);
+                    let i1 = crank
+                        .t_ns
+                        .partition_point(|&t| t < b.t1)
+                        .min(crank.t_ns.len().saturating_sub(1));
+                    (i0..i1)
+                        .filter_map(|i| {
+                            let dt = (crank.t_ns[i + 1] - crank.t_ns[i - 1]) as f64 * 1e-9;
+                            (dt > 0.0).then(|| {
+                                let w = (crank.theta[i + 1] - crank.theta[i - 1]) / dt;
+                                (crank.theta[i] - b.theta_tdc, w * 60.0 / TAU * gear)
+                            })
+                        })
+                        .collect()
+                }
+            };
+            let (m, s, mn, mx, h) = speed_stats(&sp);
+            let worst_mismatch = match (b.mismatch_deg, b.mismatch_end_deg) {
+                (Some(a), Some(e)) => Some(if a.abs() >= e.abs() { a } else { e }),
+                (a, e) => a.or(e),
+            };
+            let usable = worst_mismatch.is_none_or(|d| d.abs() <= tol);
+            let cycle = Cycle {
+                index: b.index,
+                t_start_ns: b.t0,
+                t_end_ns: b.t1,
+                duration_s: dur,
+                crank_rpm: 60.0 / dur,
+                motor_rpm_mean: m,
+                motor_rpm_std: s,
+                motor_rpm_min: mn,
+                motor_rpm_max: mx,
+                ripple_rms: s / m,
+                ripple_half_p2p: (mx - mn) / (2.0 * m),
+                ripple_first_harmonic: h,
+                mark_mismatch_deg: worst_mismatch,
+                usable,
+                stroke_mm: Vec::new(),
+                force_n: Vec::new(),
+                stroke_coverage: 0.0,
+                force_coverage: 0.0,
+                stroke_max_mm: f64::NAN,
+                stroke_min_mm: f64::NAN,
+                depth_mm: f64::NAN,
+                peak_force_n: f64::NAN,
+                stroke_err_tdc_mm: f64::NAN,
+                stroke_err_bdc_mm: f64::NAN,
+                stroke_dev_rms_mm: f64::NAN,
+                stroke_dev_max_mm: f64::NAN,
+            };
+            (gd, gf, cycle)
+        })
+        .collect();
+    let mut raw_disp: Vec<Vec<f64>> = Vec::with_capacity(per_cycle.len());
+    let mut raw_force: Vec<Vec<f64>> = Vec::with_capacity(per_cycle.len());
+    for (gd, gf, c) in per_cycle {
+        raw_disp.push(gd);
+        raw_force.push(gf);
+        set.cycles.push(c);
     }
+    let mismatched: Vec<(u64, f64, i64)> = set
+        .cycles
+        .iter()
+        .filter(|c| !c.usable)
+        .filter_map(|c| c.mark_mismatch_deg.map(|d| (c.index, d, c.t_start_ns)))
+        .collect();
     if !mismatched.is_empty() {
         let worst = mismatched.iter().map(|m| m.1.abs()).fold(0.0, f64::max);
         let (first_idx, _, t) = mismatched[0];
@@ -1497,6 +1533,38 @@ mod tests {
         assert!(((x[0].0 as f64 * 1e-9) - t0).abs() < 1e-6);
         assert_eq!(x.len(), 10);
         assert_eq!(x[1].1 - x[0].1, 1);
+    }
+
+    #[test]
+    fn hinted_lookup_matches_binary_search() {
+        let t: Vec<i64> = (0..1000).map(|i| i * 1000 + (i % 7) * 13).collect();
+        let th: Vec<f64> = (0..1000).map(|i| i as f64 * 0.01).collect();
+        let c = Crank {
+            t_ns: t,
+            theta: th,
+            dt_ns: 1000,
+            omega: 10.0,
+        };
+        let mut h = 0;
+        for q in [
+            -5i64, 0, 1, 500, 999, 1000, 1500, 70_000, 69_000, 999_000, 999_100, 2_000_000,
+        ] {
+            assert_eq!(
+                c.at_from(q, &mut h),
+                {
+                    let i = c.t_ns.partition_point(|&x| x < q);
+                    if i < c.t_ns.len() && c.t_ns[i] == q {
+                        Some(c.theta[i])
+                    } else if i == 0 || i >= c.t_ns.len() {
+                        None
+                    } else {
+                        let w = (q - c.t_ns[i - 1]) as f64 / (c.t_ns[i] - c.t_ns[i - 1]) as f64;
+                        Some(c.theta[i - 1] + w * (c.theta[i] - c.theta[i - 1]))
+                    }
+                },
+                "{q}"
+            );
+        }
     }
 
     #[test]

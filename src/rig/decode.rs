@@ -18,7 +18,7 @@
 use super::channel_map::{ChannelMap, SignalKind, SignalSource};
 use super::json::{self, Num, Val};
 use super::mcap_read::{ChannelDef, RecordVisitor, SchemaDef};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// How messages of a channel are laid out.
@@ -45,6 +45,8 @@ pub enum ChannelPlan {
         /// Schema title (block topics name their field there).
         title: Option<String>,
         signals: Vec<SignalPlan>,
+        /// Index of the first signal's buffer among all signal buffers (see [`Plans::slots`]).
+        base: usize,
     },
     /// Camera images (foxglove.CompressedImage in JSON); `full` keeps the decoded bytes.
     Image { full: bool },
@@ -54,10 +56,13 @@ pub enum ChannelPlan {
     Ignore,
 }
 
-/// Plans for all known channels.
+/// Plans for all known channels, indexed by channel id (a vector, not a
+/// map: one lookup per message), with one buffer slot per decoded signal.
 #[derive(Debug, Clone, Default)]
 pub struct Plans {
-    pub by_channel: HashMap<u16, ChannelPlan>,
+    plans: Vec<Option<ChannelPlan>>,
+    /// Per signal slot: (channel id, signal plan).
+    slots: Vec<(u16, SignalPlan)>,
 }
 
 /// Facts read from a JSON schema.
@@ -124,6 +129,7 @@ impl Plans {
                     src: src.clone(),
                 })
                 .collect(),
+            base: 0,
         }
     }
 
@@ -133,12 +139,45 @@ impl Plans {
         map: &ChannelMap,
         full_images: bool,
     ) -> Self {
-        Plans {
-            by_channel: channels
-                .values()
-                .map(|c| (c.id, Self::plan_for(c, schemas, map, full_images)))
-                .collect(),
+        let mut p = Plans::default();
+        for c in channels.values() {
+            p.insert(c.id, Self::plan_for(c, schemas, map, full_images));
         }
+        p
+    }
+
+    /// Sets the plan of a channel (signal slots are assigned here).
+    pub fn insert(&mut self, id: u16, mut plan: ChannelPlan) {
+        let i = id as usize;
+        if self.plans.len() <= i {
+            self.plans.resize(i + 1, None);
+        }
+        if let ChannelPlan::Signals { signals, base, .. } = &mut plan {
+            *base = self.slots.len();
+            for s in signals.iter() {
+                self.slots.push((id, s.clone()));
+            }
+        }
+        self.plans[i] = Some(plan);
+    }
+
+    #[inline]
+    pub fn get(&self, id: u16) -> Option<&ChannelPlan> {
+        self.plans.get(id as usize).and_then(Option::as_ref)
+    }
+
+    pub fn contains(&self, id: u16) -> bool {
+        self.get(id).is_some()
+    }
+
+    /// One past the largest channel id with a plan.
+    pub fn channel_bound(&self) -> usize {
+        self.plans.len()
+    }
+
+    /// The signal slots: (channel id, signal plan) per buffer index.
+    pub fn slots(&self) -> &[(u16, SignalPlan)] {
+        &self.slots
     }
 }
 
@@ -314,7 +353,8 @@ pub struct ImageEntry {
 pub struct Decoder {
     pub plans: Arc<Plans>,
     pub out: DecodeOut,
-    pub counts: HashMap<u16, ChanCount>,
+    /// Message counters indexed by channel id.
+    pub counts: Vec<ChanCount>,
     pub new_schemas: Vec<SchemaDef>,
     pub new_channels: Vec<ChannelDef>,
     /// Messages on channels the plans do not know (yet): (channel, log_time, payload).
@@ -324,8 +364,8 @@ pub struct Decoder {
 /// What a [`Decoder`] produced.
 #[derive(Debug, Default)]
 pub struct DecodeOut {
-    /// Signal buffers, keyed by (channel id, index of the signal in the plan).
-    pub sigs: HashMap<(u16, usize), SigBuf>,
+    /// Signal buffers, one per slot of the plans ([`Plans::slots`]).
+    pub sigs: Vec<SigBuf>,
     pub images: Vec<ImageEntry>,
     pub item_offset: u64,
 }
@@ -333,12 +373,13 @@ pub struct DecodeOut {
 impl Decoder {
     pub fn new(plans: Arc<Plans>, item_offset: u64) -> Self {
         Decoder {
-            plans,
             out: DecodeOut {
                 item_offset,
+                sigs: vec![SigBuf::default(); plans.slots.len()],
                 ..Default::default()
             },
-            counts: HashMap::new(),
+            counts: vec![ChanCount::default(); plans.channel_bound()],
+            plans,
             new_schemas: Vec::new(),
             new_channels: Vec::new(),
             deferred: Vec::new(),
@@ -347,13 +388,15 @@ impl Decoder {
 }
 
 impl DecodeOut {
-    fn sig(&mut self, ch: u16, i: usize) -> &mut SigBuf {
-        self.sigs.entry((ch, i)).or_default()
+    #[inline]
+    fn sig(&mut self, base: usize, i: usize) -> &mut SigBuf {
+        &mut self.sigs[base + i]
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn decode_signals(
         &mut self,
-        ch: u16,
+        base: usize,
         log_time: u64,
         data: &[u8],
         shape: Shape,
@@ -364,33 +407,38 @@ impl DecodeOut {
             Ok(t) => t,
             Err(_) => {
                 for i in 0..signals.len() {
-                    self.sig(ch, i).time_out_of_range += 1;
+                    self.sig(base, i).time_out_of_range += 1;
                 }
                 return;
             }
         };
         // One pass over the object: the mapped fields and the block fields.
-        let mut found: [Option<Val>; 4] = [None; 4];
+        let mut found: [Option<Val>; 5] = [None; 5];
         let mut t0 = None;
         let mut dt = None;
         let mut values = None;
         let res = json::for_each_member(data, |k, v| {
-            for (i, s) in signals.iter().enumerate().take(4) {
+            let mut hit = false;
+            for (i, s) in signals.iter().enumerate().take(5) {
                 if json::key_is(k, &s.src.field) {
                     found[i] = Some(v);
+                    hit = true;
                 }
             }
-            if json::key_is(k, "t0_ns") {
-                t0 = Some(v);
-            } else if json::key_is(k, "dt_ns") {
-                dt = Some(v);
-            } else if json::key_is(k, "values") {
-                values = Some(v);
+            // Block keys: 5 or 6 bytes long (a cheap filter before comparing).
+            if !hit && (k.len() == 5 || k.len() == 6 || k.contains(&b'\\')) {
+                if json::key_is(k, "t0_ns") {
+                    t0 = Some(v);
+                } else if json::key_is(k, "dt_ns") {
+                    dt = Some(v);
+                } else if json::key_is(k, "values") {
+                    values = Some(v);
+                }
             }
         });
         if let Err(e) = res {
             for i in 0..signals.len() {
-                let b = self.sig(ch, i);
+                let b = self.sig(base, i);
                 b.messages += 1;
                 b.malformed += 1;
                 if b.malformed_first.is_none() {
@@ -407,7 +455,7 @@ impl DecodeOut {
         };
         for (i, s) in signals.iter().enumerate() {
             let src = &s.src;
-            let b = self.sigs.entry((ch, i)).or_default();
+            let b = &mut self.sigs[base + i];
             b.messages += 1;
             if is_block {
                 // A block topic names its field in the schema title.
@@ -576,28 +624,22 @@ impl RecordVisitor for Decoder {
     }
 
     fn message(&mut self, channel_id: u16, log_time: u64, data: &[u8]) {
-        let Some(plan) = self.plans.by_channel.get(&channel_id) else {
+        let Some(plan) = self.plans.get(channel_id) else {
             self.deferred.push((channel_id, log_time, data.to_vec()));
             return;
         };
-        self.counts
-            .entry(channel_id)
-            .or_default()
-            .add_time(log_time);
+        if let Some(c) = self.counts.get_mut(channel_id as usize) {
+            c.add_time(log_time);
+        }
         match plan {
             ChannelPlan::Signals {
                 shape,
                 title,
                 signals,
+                base,
             } => {
-                self.out.decode_signals(
-                    channel_id,
-                    log_time,
-                    data,
-                    *shape,
-                    title.as_deref(),
-                    signals,
-                );
+                self.out
+                    .decode_signals(*base, log_time, data, *shape, title.as_deref(), signals);
             }
             ChannelPlan::Image { full } => self.out.decode_image(channel_id, log_time, data, *full),
             _ => {}
@@ -611,9 +653,10 @@ mod tests {
 
     fn plans_for(shape: Shape, title: Option<&str>, kinds: &[(SignalKind, &str)]) -> Plans {
         let mut p = Plans::default();
-        p.by_channel.insert(
+        p.insert(
             1,
             ChannelPlan::Signals {
+                base: 0,
                 shape,
                 title: title.map(str::to_string),
                 signals: kinds
@@ -650,7 +693,7 @@ mod tests {
         d.message(1, 20, br#"{"angle_rad": null, "speed_rpm": 3}"#);
         d.message(1, 30, br#"{"speed_rpm": 3"#);
         d.message(1, 40, br#"{"t0_ns": 40, "dt_ns": 1, "values": [1,2]}"#);
-        let a = &d.out.sigs[&(1, 0)];
+        let a = &d.out.sigs[0];
         assert_eq!(a.samples[0], (10, 3.0));
         assert!(a.samples[1].1.is_nan());
         assert_eq!(a.invalid.null, 1);
@@ -659,10 +702,10 @@ mod tests {
             a.wrong_shape, 1,
             "a block on a scalar channel is never read as a scalar"
         );
-        let s = &d.out.sigs[&(1, 1)];
+        let s = &d.out.sigs[1];
         assert_eq!(s.invalid.nan_token, 1);
         assert_eq!(s.samples[1], (20, 7.0));
-        assert_eq!(d.counts[&1].messages, 4);
+        assert_eq!(d.counts[1].messages, 4);
     }
 
     #[test]
@@ -679,7 +722,7 @@ mod tests {
             br#"{"t0_ns": 1000, "dt_ns": 100, "values": [0.5, NaN, 1.5]}"#,
         );
         d.message(1, 5000, br#"{"t0_ns": 4000, "dt_ns": 100, "values": [2]}"#);
-        let f = &d.out.sigs[&(1, 0)];
+        let f = &d.out.sigs[0];
         assert_eq!(f.samples.len(), 4);
         assert_eq!(f.samples[0], (1000, 2.0));
         assert_eq!(f.samples[2], (1200, 4.0));
@@ -698,8 +741,8 @@ mod tests {
             1000,
             br#"{"t0_ns": 1000, "dt_ns": 100, "values": [0.5]}"#,
         );
-        assert_eq!(d2.out.sigs[&(1, 0)].wrong_shape, 1);
-        assert!(d2.out.sigs[&(1, 0)].samples.is_empty());
+        assert_eq!(d2.out.sigs[0].wrong_shape, 1);
+        assert!(d2.out.sigs[0].samples.is_empty());
     }
 
     #[test]
@@ -713,14 +756,14 @@ mod tests {
         );
         d.message(1, 2000, br#"{"force_n": 1}"#);
         d.message(9, 3000, br#"{"x": 1}"#);
-        assert_eq!(d.out.sigs[&(1, 0)].samples.len(), 3);
+        assert_eq!(d.out.sigs[0].samples.len(), 3);
         assert_eq!(d.deferred.len(), 1);
     }
 
     #[test]
     fn images_decode_base64() {
         let mut p = Plans::default();
-        p.by_channel.insert(2, ChannelPlan::Image { full: true });
+        p.insert(2, ChannelPlan::Image { full: true });
         let mut d = Decoder::new(Arc::new(p), 77);
         d.message(
             2,

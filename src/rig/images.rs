@@ -90,9 +90,7 @@ pub fn read_image(path: &Path, r: &ImageRef) -> Result<LogImage, LogError> {
         message: format!("no chunk or message record at byte {}", r.item_offset),
     })?;
     let mut plans = Plans::default();
-    plans
-        .by_channel
-        .insert(r.channel_id, ChannelPlan::Image { full: true });
+    plans.insert(r.channel_id, ChannelPlan::Image { full: true });
     let mut dec = Decoder::new(Arc::new(plans), item.offset);
     let out = mcap_read::decode_item(
         b,

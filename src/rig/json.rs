@@ -276,11 +276,12 @@ pub fn for_each_element<'a>(b: &'a [u8], f: impl FnMut(Val<'a>)) -> Result<(), J
 }
 
 /// Whether a raw key (escapes not decoded) equals `name`.
+#[inline(always)]
 pub fn key_is(raw: &[u8], name: &str) -> bool {
-    if !raw.contains(&b'\\') {
-        return raw == name.as_bytes();
-    }
-    unescape(raw).is_some_and(|s| s == name)
+    let n = name.as_bytes();
+    // A byte loop: keys are a few bytes, cheaper than a memcmp call.
+    (raw.len() == n.len() && raw.iter().zip(n).all(|(a, b)| a == b))
+        || (raw.contains(&b'\\') && unescape(raw).is_some_and(|s| s == name))
 }
 
 /// Decodes a raw string's content (handles escapes via serde_json).
@@ -295,11 +296,61 @@ pub fn unescape(raw: &[u8]) -> Option<String> {
     serde_json::from_slice::<String>(&quoted).ok()
 }
 
+/// Clinger's fast path: a decimal `[-]digits[.digits]` with at most 15
+/// significant digits and at most 22 fraction digits is m / 10^k with m and
+/// 10^k exact in f64, so one correctly rounded division gives the correctly
+/// rounded value. Anything else (exponents, long mantissas) returns None and
+/// goes to the standard parser.
+#[inline]
+fn fast_decimal(s: &[u8]) -> Option<f64> {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    let (neg, digits) = match s.first() {
+        Some(b'-') => (true, &s[1..]),
+        _ => (false, s),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    let mut m: u64 = 0;
+    let mut nd = 0usize;
+    let mut frac: Option<usize> = None;
+    for &c in digits {
+        match c {
+            b'0'..=b'9' => {
+                if m != 0 || c != b'0' {
+                    nd += 1;
+                }
+                m = m * 10 + (c - b'0') as u64;
+                if let Some(f) = frac.as_mut() {
+                    *f += 1;
+                }
+                if nd > 15 {
+                    return None;
+                }
+            }
+            b'.' if frac.is_none() => frac = Some(0),
+            _ => return None,
+        }
+    }
+    let k = frac.unwrap_or(0);
+    if k > 22 {
+        return None;
+    }
+    let v = m as f64 / POW10[k];
+    Some(if neg { -v } else { v })
+}
+
 impl Val<'_> {
     /// The value as a sample.
     pub fn num(&self) -> Num {
         match self {
             Val::Num(s) => {
+                if let Some(x) = fast_decimal(s) {
+                    return Num::Finite(x);
+                }
                 // The scanner only lets ASCII number syntax through.
                 match std::str::from_utf8(s)
                     .ok()
@@ -384,6 +435,30 @@ mod tests {
     }
 
     #[test]
+    fn fast_decimal_is_correctly_rounded() {
+        for t in [
+            "0",
+            "-0.5",
+            "1.25",
+            "9.069",
+            "-0.0104",
+            "1200.00",
+            "0.1",
+            "123456789012345",
+            "0.000000000000000000001",
+        ] {
+            assert_eq!(
+                fast_decimal(t.as_bytes()),
+                Some(t.parse::<f64>().unwrap()),
+                "{t}"
+            );
+        }
+        assert_eq!(fast_decimal(b"1.3406992086120504"), None);
+        assert_eq!(fast_decimal(b"1e5"), None);
+        assert_eq!(fast_decimal(b"-"), None);
+    }
+
+    #[test]
     fn exact_integers() {
         let mut t = None;
         for_each_member(br#"{"t0_ns": 1795156933118090001, "i": 3.0}"#, |k, v| {
@@ -464,6 +539,16 @@ mod tests {
                     serde_json::Value::Null => prop_assert_eq!(*v, Val::Null),
                     _ => {}
                 }
+            }
+        }
+
+        /// The fast decimal path agrees with the standard parser.
+        #[test]
+        fn fast_path_agrees(int in 0u64..1_000_000_000, frac in 0u64..1_000_000, k in 0usize..7, neg in any::<bool>()) {
+            let t = format!("{}{int}.{:0k$}", if neg { "-" } else { "" }, frac % 10u64.pow(k as u32), k = k);
+            let t = t.trim_end_matches('.').to_string();
+            if let Some(x) = fast_decimal(t.as_bytes()) {
+                prop_assert_eq!(x, t.parse::<f64>().unwrap(), "{}", t);
             }
         }
 

@@ -11,6 +11,7 @@ use super::meta::RigMeta;
 use super::report::{Finding, FindingCode, LoadReport, Place, ReadCounts, Severity, status_of};
 use super::signals::{self, Signal, SignalStats};
 use crate::progress::Progress;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
@@ -232,31 +233,28 @@ impl State {
     }
 
     fn absorb(&mut self, mut dec: Decoder, stats_counts: Option<&BTreeMap<u16, u64>>) {
-        for (ch, c) in dec.counts.drain() {
-            self.counts.entry(ch).or_default().merge(&c);
+        for (ch, c) in dec.counts.iter().enumerate() {
+            if c.messages > 0 {
+                self.counts.entry(ch as u16).or_default().merge(c);
+            }
         }
-        let mut keys: Vec<(u16, usize)> = dec.out.sigs.keys().copied().collect();
-        keys.sort_unstable();
-        for key in keys {
-            let Some(mut b) = dec.out.sigs.remove(&key) else {
+        let plans = dec.plans.clone();
+        for (slot, b) in dec.out.sigs.iter_mut().enumerate() {
+            if b.messages == 0 && b.samples.is_empty() {
                 continue;
-            };
-            let Some(ChannelPlan::Signals { signals, .. }) = self.plans.by_channel.get(&key.0)
-            else {
-                continue;
-            };
-            let Some(sp) = signals.get(key.1) else {
+            }
+            let Some((ch, sp)) = plans.slots().get(slot) else {
                 continue;
             };
             let entry = self.sigs.entry(sp.kind).or_insert_with(|| {
                 let mut sb = SigBuf::default();
                 if let Some(sc) = stats_counts {
-                    let n: u64 = sc.get(&key.0).copied().unwrap_or(0);
+                    let n: u64 = sc.get(ch).copied().unwrap_or(0);
                     sb.samples.reserve(n.min(1 << 30) as usize);
                 }
                 (sp.src.topic.clone(), sp.src.field.clone(), sb)
             });
-            entry.2.append(&mut b);
+            entry.2.append(b);
         }
         self.images.append(&mut dec.out.images);
         for (ch, t, _) in dec.deferred.drain(..) {
@@ -275,14 +273,13 @@ fn build_plans(
     let mut p = Plans::build(channels, schemas, map, full_images);
     // Images are recognised by schema too, whatever their topic.
     for c in channels.values() {
-        if matches!(p.by_channel.get(&c.id), Some(ChannelPlan::Ignore))
+        if matches!(p.get(c.id), Some(ChannelPlan::Ignore))
             && c.message_encoding == "json"
             && schemas
                 .get(&c.schema_id)
                 .is_some_and(|s| s.name == "foxglove.CompressedImage")
         {
-            p.by_channel
-                .insert(c.id, ChannelPlan::Image { full: full_images });
+            p.insert(c.id, ChannelPlan::Image { full: full_images });
         }
     }
     p
@@ -363,10 +360,7 @@ pub(crate) fn load_inner(
             // decoded alongside it): decode the item again with the new plans,
             // which keeps the file order exact.
             if !dec.deferred.is_empty()
-                && dec
-                    .deferred
-                    .iter()
-                    .any(|(c, _, _)| st.plans.by_channel.contains_key(c))
+                && dec.deferred.iter().any(|(c, _, _)| st.plans.contains(*c))
             {
                 let mut again = Decoder::new(st.plans.clone(), item.offset);
                 out = mcap_read::decode_item(b, item, &opts.read, &mut scratch, &mut again);
@@ -452,9 +446,17 @@ pub(crate) fn load_inner(
     let mut sigs = Signals::default();
     let mut sig_stats = Vec::new();
     let mut sig_findings: Vec<(SignalKind, String, Vec<Finding>)> = Vec::new();
-    for (kind, (topic, field, buf)) in std::mem::take(&mut st.sigs) {
-        let (s, stt, f) = signals::finish(kind, &topic, &field, buf, &file, span);
-        sig_findings.push((kind, topic.clone(), f));
+    // Signals are independent: finish them in parallel.
+    let pending: Vec<_> = std::mem::take(&mut st.sigs).into_iter().collect();
+    let finished: Vec<_> = pending
+        .into_par_iter()
+        .map(|(kind, (topic, field, buf))| {
+            let r = signals::finish(kind, &topic, &field, buf, &file, span);
+            (kind, topic, r)
+        })
+        .collect();
+    for (kind, topic, (s, stt, f)) in finished {
+        sig_findings.push((kind, topic, f));
         sig_stats.push(stt);
         *sigs.slot(kind) = Some(s);
     }
@@ -508,10 +510,7 @@ pub(crate) fn load_inner(
             .iter()
             .map(|(k, _)| k.name().to_string())
             .collect();
-        if matches!(
-            st.plans.by_channel.get(&c.id),
-            Some(ChannelPlan::Image { .. })
-        ) {
+        if matches!(st.plans.get(c.id), Some(ChannelPlan::Image { .. })) {
             used_as.push("images".into());
         }
         let span_s = (cnt.last.saturating_sub(cnt.first)) as f64 * 1e-9;
@@ -572,10 +571,7 @@ pub(crate) fn load_inner(
                     .values()
                     .filter(|c| {
                         c.topic == s.topic
-                            && matches!(
-                                st.plans.by_channel.get(&c.id),
-                                Some(ChannelPlan::Undecodable)
-                            )
+                            && matches!(st.plans.get(c.id), Some(ChannelPlan::Undecodable))
                     })
                     .collect();
                 if let Some(c) = undecodable.first() {

@@ -240,7 +240,7 @@ pub fn finish(
     if let Some(dt) = dt {
         for p in times.windows(2) {
             let d = p[1] - p[0];
-            if d * 2 > dt * 3 {
+            if d.saturating_mul(2) > dt.saturating_mul(3) {
                 let missing = ((d as f64 / dt as f64).round() as u64)
                     .saturating_sub(1)
                     .max(1);
@@ -514,7 +514,7 @@ pub fn finish(
             prev = Some((t, v));
         }
     } else if let (Some(dt), Some(_)) = (dt, first_ns) {
-        let tol = (10 * dt).max(5_000_000) as f64 * 1e-9;
+        let tol = dt.saturating_mul(10).max(5_000_000) as f64 * 1e-9;
         if start_delay_s > tol {
             push(
                 Severity::Warning,
