@@ -84,7 +84,7 @@ fn cpu_s() -> f64 {
 }
 
 /// One load + cycles in this process; prints the figures as one JSON line.
-fn child(path: &PathBuf) {
+fn child(path: &std::path::Path) {
     let c0 = cpu_s();
     let t = Instant::now();
     let log = load(path, &LoadOptions::default(), &Progress::hidden()).expect("load");
