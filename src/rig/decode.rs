@@ -213,8 +213,9 @@ impl InvalidCounts {
 /// Samples and counters of one signal from one work item (or merged).
 #[derive(Debug, Clone, Default)]
 pub struct SigBuf {
-    /// (log_time ns, value) in file order; NaN marks an invalid sample.
-    pub samples: Vec<(i64, f64)>,
+    /// log_time (ns) and value per sample, in file order; NaN marks an invalid sample.
+    pub t: Vec<i64>,
+    pub v: Vec<f64>,
     pub messages: u64,
     pub blocks: u64,
     pub invalid: InvalidCounts,
@@ -233,7 +234,8 @@ pub struct SigBuf {
 
 impl SigBuf {
     pub fn append(&mut self, o: &mut SigBuf) {
-        self.samples.append(&mut o.samples);
+        self.t.append(&mut o.t);
+        self.v.append(&mut o.v);
         self.messages += o.messages;
         self.blocks += o.blocks;
         self.invalid.add(&o.invalid);
@@ -279,7 +281,8 @@ impl SigBuf {
         if self.invalid_times.len() < KEEP_TIMES {
             self.invalid_times.push((t, kind));
         }
-        self.samples.push((t, f64::NAN));
+        self.t.push(t);
+        self.v.push(f64::NAN);
     }
 
     #[inline]
@@ -288,7 +291,8 @@ impl SigBuf {
             Num::Finite(x) => {
                 let v = src.convert(x);
                 if v.is_finite() {
-                    self.samples.push((t, v));
+                    self.t.push(t);
+                    self.v.push(v);
                 } else {
                     self.invalid(t, Num::NonFinite);
                 }
@@ -694,8 +698,8 @@ mod tests {
         d.message(1, 30, br#"{"speed_rpm": 3"#);
         d.message(1, 40, br#"{"t0_ns": 40, "dt_ns": 1, "values": [1,2]}"#);
         let a = &d.out.sigs[0];
-        assert_eq!(a.samples[0], (10, 3.0));
-        assert!(a.samples[1].1.is_nan());
+        assert_eq!((a.t[0], a.v[0]), (10, 3.0));
+        assert!(a.v[1].is_nan());
         assert_eq!(a.invalid.null, 1);
         assert_eq!(a.malformed, 1);
         assert_eq!(
@@ -704,7 +708,7 @@ mod tests {
         );
         let s = &d.out.sigs[1];
         assert_eq!(s.invalid.nan_token, 1);
-        assert_eq!(s.samples[1], (20, 7.0));
+        assert_eq!((s.t[1], s.v[1]), (20, 7.0));
         assert_eq!(d.counts[1].messages, 4);
     }
 
@@ -723,10 +727,10 @@ mod tests {
         );
         d.message(1, 5000, br#"{"t0_ns": 4000, "dt_ns": 100, "values": [2]}"#);
         let f = &d.out.sigs[0];
-        assert_eq!(f.samples.len(), 4);
-        assert_eq!(f.samples[0], (1000, 2.0));
-        assert_eq!(f.samples[2], (1200, 4.0));
-        assert_eq!(f.samples[3].0, 4000);
+        assert_eq!(f.t.len(), 4);
+        assert_eq!((f.t[0], f.v[0]), (1000, 2.0));
+        assert_eq!((f.t[2], f.v[2]), (1200, 4.0));
+        assert_eq!(f.t[3], 4000);
         assert_eq!(f.invalid.nan_token, 1);
         assert_eq!(f.blocks, 2);
         assert_eq!(f.block_time_mismatch, 1);
@@ -742,7 +746,7 @@ mod tests {
             br#"{"t0_ns": 1000, "dt_ns": 100, "values": [0.5]}"#,
         );
         assert_eq!(d2.out.sigs[0].wrong_shape, 1);
-        assert!(d2.out.sigs[0].samples.is_empty());
+        assert!(d2.out.sigs[0].t.is_empty());
     }
 
     #[test]
@@ -756,7 +760,7 @@ mod tests {
         );
         d.message(1, 2000, br#"{"force_n": 1}"#);
         d.message(9, 3000, br#"{"x": 1}"#);
-        assert_eq!(d.out.sigs[0].samples.len(), 3);
+        assert_eq!(d.out.sigs[0].t.len(), 3);
         assert_eq!(d.deferred.len(), 1);
     }
 

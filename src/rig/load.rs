@@ -240,7 +240,7 @@ impl State {
         }
         let plans = dec.plans.clone();
         for (slot, b) in dec.out.sigs.iter_mut().enumerate() {
-            if b.messages == 0 && b.samples.is_empty() {
+            if b.messages == 0 && b.t.is_empty() {
                 continue;
             }
             let Some((ch, sp)) = plans.slots().get(slot) else {
@@ -250,7 +250,8 @@ impl State {
                 let mut sb = SigBuf::default();
                 if let Some(sc) = stats_counts {
                     let n: u64 = sc.get(ch).copied().unwrap_or(0);
-                    sb.samples.reserve(n.min(1 << 30) as usize);
+                    sb.t.reserve(n.min(1 << 30) as usize);
+                    sb.v.reserve(n.min(1 << 30) as usize);
                 }
                 (sp.src.topic.clone(), sp.src.field.clone(), sb)
             });

@@ -3,9 +3,10 @@
 //!
 //! A [`Signal`] holds `t_ns` (log_time, ns since the Unix epoch, i64) and
 //! `values` (canonical unit), sorted by time, one sample per timestamp,
-//! invalid samples removed: 16 bytes per sample. (While loading, a signal's
-//! samples are held once more as (time, value) pairs in file order, so the
-//! peak for the largest signal is about twice that.)
+//! invalid samples removed: 16 bytes per sample. The loader collects them in
+//! file order in the same two vectors; finishing works in place (a log
+//! already in time order is not copied; one out of order is sorted through
+//! a permutation, a transient 8 + 16 bytes per sample of that signal).
 //!
 //! Finishing a signal (file order → sorted) measures, per channel: steps
 //! back in time in file order (a clock jump when there are a few, a file
@@ -180,65 +181,73 @@ pub fn finish(
     let mut push = |sev, code, place, text: String| {
         findings.push(Finding::new(sev, code, file, ch, place, text));
     };
-    let samples = &mut buf.samples;
-    let received = samples.len() as u64;
+    let mut t_ns = std::mem::take(&mut buf.t);
+    let mut values = std::mem::take(&mut buf.v);
+    let received = t_ns.len() as u64;
 
     // File order: steps back and out-of-order messages.
     let mut back: Vec<(usize, i64, i64)> = Vec::new();
     let mut backward_steps = 0u64;
     let mut out_of_order = 0u64;
     let mut run_max = i64::MIN;
-    for (i, w) in samples.iter().enumerate() {
-        if i > 0 && w.0 < samples[i - 1].0 {
+    for (i, &t) in t_ns.iter().enumerate() {
+        if i > 0 && t < t_ns[i - 1] {
             backward_steps += 1;
             if back.len() < 20 {
-                back.push((i, samples[i - 1].0, w.0));
+                back.push((i, t_ns[i - 1], t));
             }
         }
-        if w.0 < run_max {
+        if t < run_max {
             out_of_order += 1;
         }
-        run_max = run_max.max(w.0);
+        run_max = run_max.max(t);
     }
 
-    // Sort (stable: duplicates keep file order) and de-duplicate.
+    // Sort (stable: duplicates keep file order). In time order already (the
+    // usual case) nothing moves; otherwise through a permutation.
     if backward_steps > 0 {
-        samples.sort_by_key(|s| s.0);
+        let mut perm: Vec<usize> = (0..t_ns.len()).collect();
+        perm.sort_by_key(|&i| t_ns[i]);
+        t_ns = perm.iter().map(|&i| t_ns[i]).collect();
+        values = perm.iter().map(|&i| values[i]).collect();
     }
+
+    // De-duplicate in place, the first sample of a timestamp is kept.
     let mut duplicates = 0u64;
     let mut identical = 0u64;
     let mut dup_times = Vec::new();
     let mut w = 0usize;
-    for r in 0..samples.len() {
-        if w > 0 && samples[r].0 == samples[w - 1].0 {
+    for r in 0..t_ns.len() {
+        if w > 0 && t_ns[r] == t_ns[w - 1] {
             duplicates += 1;
-            let (a, b) = (samples[w - 1].1, samples[r].1);
+            let (a, b) = (values[w - 1], values[r]);
             if a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()) {
                 identical += 1;
             }
             if dup_times.len() < 50 {
-                dup_times.push(samples[r].0);
+                dup_times.push(t_ns[r]);
             }
             continue;
         }
-        samples[w] = samples[r];
+        t_ns[w] = t_ns[r];
+        values[w] = values[r];
         w += 1;
     }
-    samples.truncate(w);
+    t_ns.truncate(w);
+    values.truncate(w);
 
-    let times: Vec<i64> = samples.iter().map(|s| s.0).collect();
     let dt = if kind == SignalKind::Cycle {
         None
     } else {
-        nominal_dt(&times)
+        nominal_dt(&t_ns)
     };
 
-    // Gaps.
+    // Gaps (invalid samples count as received: a NaN is not a gap).
     let mut gaps = Vec::new();
     let mut gap_count = 0u64;
     let mut missing_total = 0u64;
     if let Some(dt) = dt {
-        for p in times.windows(2) {
+        for p in t_ns.windows(2) {
             let d = p[1] - p[0];
             if d.saturating_mul(2) > dt.saturating_mul(3) {
                 let missing = ((d as f64 / dt as f64).round() as u64)
@@ -257,20 +266,23 @@ pub fn finish(
             }
         }
     }
+    let first_ns = t_ns.first().copied();
+    let last_ns = t_ns.last().copied();
 
-    // Valid samples → arrays.
-    let mut t_ns = Vec::with_capacity(samples.len());
-    let mut values = Vec::with_capacity(samples.len());
-    for &(t, v) in samples.iter() {
-        if !v.is_nan() {
-            t_ns.push(t);
-            values.push(v);
+    // Invalid samples out, in place.
+    if values.iter().any(|v| v.is_nan()) {
+        let mut w = 0usize;
+        for r in 0..t_ns.len() {
+            if !values[r].is_nan() {
+                t_ns[w] = t_ns[r];
+                values[w] = values[r];
+                w += 1;
+            }
         }
+        t_ns.truncate(w);
+        values.truncate(w);
     }
-    buf.samples = Vec::new();
 
-    let first_ns = times.first().copied();
-    let last_ns = times.last().copied();
     let span_s = match (first_ns, last_ns) {
         (Some(a), Some(b)) => (b - a) as f64 * 1e-9,
         _ => 0.0,
@@ -592,7 +604,8 @@ mod tests {
     fn buf(samples: Vec<(i64, f64)>) -> SigBuf {
         SigBuf {
             messages: samples.len() as u64,
-            samples,
+            t: samples.iter().map(|s| s.0).collect(),
+            v: samples.iter().map(|s| s.1).collect(),
             ..Default::default()
         }
     }
