@@ -365,11 +365,22 @@ pub struct Decoder {
     pub deferred: Vec<(u16, u64, Vec<u8>)>,
 }
 
+/// A learned message layout of one channel (see [`json::Layout`]).
+#[derive(Debug, Clone)]
+struct LayoutEntry {
+    /// The channel's first signal slot (identifies the channel).
+    base: usize,
+    layout: json::Layout,
+    /// For each signal of the plan, the position of its value in the layout.
+    field_pos: Vec<Option<usize>>,
+}
+
 /// What a [`Decoder`] produced.
 #[derive(Debug, Default)]
 pub struct DecodeOut {
     /// Signal buffers, one per slot of the plans ([`Plans::slots`]).
     pub sigs: Vec<SigBuf>,
+    layouts: Vec<LayoutEntry>,
     pub images: Vec<ImageEntry>,
     pub item_offset: u64,
 }
@@ -416,6 +427,26 @@ impl DecodeOut {
                 return;
             }
         };
+        // Fast path: the channel's learned layout (numbers only).
+        if shape != Shape::Block {
+            if let Some(e) = self.layouts.iter().find(|e| e.base == base) {
+                let mut vals: [&[u8]; 8] = [&[]; 8];
+                if e.layout.matches(data, &mut vals) {
+                    for (i, s) in signals.iter().enumerate() {
+                        let b = &mut self.sigs[base + i];
+                        b.messages += 1;
+                        match e.field_pos.get(i).copied().flatten() {
+                            Some(k) => b.push(t, Val::Num(vals[k]).num(), &s.src),
+                            None => {
+                                b.missing_field += 1;
+                                b.missing_field_first.get_or_insert(t);
+                            }
+                        }
+                    }
+                    return;
+                }
+            }
+        }
         // One pass over the object: the mapped fields and the block fields.
         let mut found: [Option<Val>; 5] = [None; 5];
         let mut t0 = None;
@@ -452,6 +483,21 @@ impl DecodeOut {
             return;
         }
         let looks_block = values.is_some() && (t0.is_some() || dt.is_some());
+        if !looks_block && shape != Shape::Block && !self.layouts.iter().any(|e| e.base == base) {
+            if let Some((layout, keys)) = json::Layout::learn(data).filter(|(l, _)| l.values() <= 8)
+            {
+                // The last occurrence of a key wins, as in the scan above.
+                let field_pos = signals
+                    .iter()
+                    .map(|s| keys.iter().rposition(|k| json::key_is(k, &s.src.field)))
+                    .collect();
+                self.layouts.push(LayoutEntry {
+                    base,
+                    layout,
+                    field_pos,
+                });
+            }
+        }
         let is_block = match shape {
             Shape::Block => true,
             Shape::Scalar => false,

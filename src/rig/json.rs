@@ -275,6 +275,92 @@ pub fn for_each_element<'a>(b: &'a [u8], f: impl FnMut(Val<'a>)) -> Result<(), J
     p.end()
 }
 
+/// The layout of a flat object whose member values are all numbers: the
+/// literal text before, between and after the values. Rig messages on one
+/// channel are written by one program with one format string, so after one
+/// full parse the next messages can be matched against the literals and
+/// only the numbers scanned. A message that differs in any byte outside the
+/// numbers does not match and goes through the full scanner; one that
+/// matches is valid JSON with the same keys (the literals came from a valid
+/// message and every number is checked against the grammar).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    literals: Vec<Vec<u8>>,
+}
+
+/// End of a JSON number starting at `pos` (grammar checked; no NaN/Infinity).
+fn number_end(b: &[u8], pos: usize) -> Option<usize> {
+    let mut p = P { b, i: pos };
+    match p.number() {
+        Ok(Val::Num(_)) => Some(p.i),
+        _ => None,
+    }
+}
+
+impl Layout {
+    /// Learns the layout of a message whose members are all plain numbers;
+    /// returns it with the raw keys in member order.
+    pub fn learn(data: &[u8]) -> Option<(Layout, Vec<&[u8]>)> {
+        let base = data.as_ptr() as usize;
+        let mut spans = Vec::new();
+        let mut keys = Vec::new();
+        let mut all_numbers = true;
+        for_each_member(data, |k, v| match v {
+            Val::Num(n) => {
+                let start = n.as_ptr() as usize - base;
+                spans.push((start, start + n.len()));
+                keys.push(k);
+            }
+            _ => all_numbers = false,
+        })
+        .ok()?;
+        if !all_numbers || spans.is_empty() {
+            return None;
+        }
+        let mut literals = Vec::with_capacity(spans.len() + 1);
+        let mut prev = 0;
+        for &(a, b) in &spans {
+            literals.push(data[prev..a].to_vec());
+            prev = b;
+        }
+        literals.push(data[prev..].to_vec());
+        Some((Layout { literals }, keys))
+    }
+
+    /// Number of values.
+    pub fn values(&self) -> usize {
+        self.literals.len() - 1
+    }
+
+    /// Matches a message; fills `out` with the number slices in member order.
+    #[inline]
+    pub fn matches<'a>(&self, data: &'a [u8], out: &mut [&'a [u8]]) -> bool {
+        let n = self.values();
+        if out.len() < n {
+            return false;
+        }
+        let mut pos = 0usize;
+        for (i, lit) in self.literals.iter().enumerate() {
+            let Some(rest) = data.get(pos..) else {
+                return false;
+            };
+            if !rest.starts_with(lit) {
+                return false;
+            }
+            pos += lit.len();
+            if i == n {
+                return pos == data.len();
+            }
+            let Some(end) = number_end(data, pos) else {
+                return false;
+            };
+            out[i] = &data[pos..end];
+            pos = end;
+        }
+        false
+    }
+}
+
 /// Whether a raw key (escapes not decoded) equals `name`.
 #[inline(always)]
 pub fn key_is(raw: &[u8], name: &str) -> bool {
@@ -459,6 +545,31 @@ mod tests {
     }
 
     #[test]
+    fn layouts_match_only_the_same_shape() {
+        let (lay, keys) = Layout::learn(br#"{"angle_rad": 1.25, "speed_rpm": 1200.00}"#).unwrap();
+        assert_eq!(keys, vec![&b"angle_rad"[..], &b"speed_rpm"[..]]);
+        let mut out = [&b""[..]; 4];
+        assert!(lay.matches(br#"{"angle_rad": 6.2831853, "speed_rpm": -1e3}"#, &mut out));
+        assert_eq!((out[0], out[1]), (&b"6.2831853"[..], &b"-1e3"[..]));
+        for bad in [
+            &br#"{"angle_rad": NaN, "speed_rpm": 1}"#[..],
+            br#"{"angle_rad": 1, "speed_rpm": 1} "#,
+            br#"{"angle_rad":1, "speed_rpm": 1}"#,
+            br#"{"angle_rad": 1., "speed_rpm": 1}"#,
+            br#"{"angle_rad": 1, "speed_rpm": 1"#,
+            br#"{"angle_rad": 1, "speed_rpx": 1}"#,
+        ] {
+            assert!(
+                !lay.matches(bad, &mut out),
+                "{}",
+                String::from_utf8_lossy(bad)
+            );
+        }
+        assert!(Layout::learn(br#"{"a": 1, "b": "x"}"#).is_none());
+        assert!(Layout::learn(br#"{"a": [1]}"#).is_none());
+    }
+
+    #[test]
     fn exact_integers() {
         let mut t = None;
         for_each_member(br#"{"t0_ns": 1795156933118090001, "i": 3.0}"#, |k, v| {
@@ -549,6 +660,25 @@ mod tests {
             let t = t.trim_end_matches('.').to_string();
             if let Some(x) = fast_decimal(t.as_bytes()) {
                 prop_assert_eq!(x, t.parse::<f64>().unwrap(), "{}", t);
+            }
+        }
+
+        /// A message the layout matches parses to the same numbers with the full scanner.
+        #[test]
+        fn layout_agrees_with_the_scanner(a in -1e6f64..1e6, b in any::<u32>(), junk in prop::collection::vec(any::<u8>(), 0..3), at in 0usize..40) {
+            let (lay, _) = Layout::learn(br#"{"x": 1.5, "y": 2}"#).unwrap();
+            let mut msg = format!(r#"{{"x": {a}, "y": {b}}}"#).into_bytes();
+            let at = at.min(msg.len());
+            for (k, j) in junk.iter().enumerate() {
+                msg.insert((at + k).min(msg.len()), *j);
+            }
+            let mut out = [&b""[..]; 2];
+            if lay.matches(&msg, &mut out) {
+                let mut full = Vec::new();
+                prop_assert!(for_each_member(&msg, |_, v| full.push(v)).is_ok());
+                prop_assert_eq!(full.len(), 2);
+                prop_assert_eq!(full[0], Val::Num(out[0]));
+                prop_assert_eq!(full[1], Val::Num(out[1]));
             }
         }
 
