@@ -24,6 +24,10 @@
 //! | [`batch`] | headless rendering of panes and batch scripts with checks |
 //! | [`cli`] | the `pinsight` command line |
 
+// Numerical code: `!(x > 0.0)` is how a validation also rejects NaN, and
+// kernels index several arrays in lock step.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
 pub mod batch;
 pub mod cli;
 pub mod methods;

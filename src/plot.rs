@@ -244,17 +244,49 @@ macro_rules! draw_line_chart_body {
         for (i, s) in chart.series.iter().enumerate() {
             let col = palette(s.color.unwrap_or(i));
             let style = ShapeStyle::from(&col).stroke_width(2);
-            let pts: Vec<(f64, f64)> = s
-                .points
-                .iter()
-                .copied()
-                .filter(|(x, y)| {
-                    x.is_finite()
-                        && y.is_finite()
-                        && (!chart.log_x || *x > 0.0)
-                        && (!chart.log_y || *y > 0.0)
-                })
-                .collect();
+            // A non-finite point breaks the line into separate segments.
+            let ok = |(x, y): &(f64, f64)| {
+                x.is_finite()
+                    && y.is_finite()
+                    && (!chart.log_x || *x > 0.0)
+                    && (!chart.log_y || *y > 0.0)
+            };
+            let mut segments: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+            for p in &s.points {
+                if ok(p) {
+                    if let Some(last) = segments.last_mut() {
+                        last.push(*p);
+                    }
+                } else if segments.last().is_some_and(|l| !l.is_empty()) {
+                    segments.push(Vec::new());
+                }
+            }
+            segments.retain(|seg| !seg.is_empty());
+            if segments.is_empty() {
+                segments.push(Vec::new());
+            }
+            let rest: Vec<Vec<(f64, f64)>> = segments.split_off(1);
+            let pts = segments.pop().unwrap_or_default();
+            for seg in rest {
+                match s.style {
+                    SeriesStyle::Line | SeriesStyle::LinePoints => {
+                        c.draw_series(LineSeries::new(seg.clone(), style))
+                            .map_err(draw_err($title))?;
+                    }
+                    SeriesStyle::Dashed => {
+                        c.draw_series(DashedLineSeries::new(seg.clone(), 8, 5, style))
+                            .map_err(draw_err($title))?;
+                    }
+                    SeriesStyle::Points => {}
+                }
+                if matches!(s.style, SeriesStyle::Points | SeriesStyle::LinePoints) {
+                    c.draw_series(
+                        seg.into_iter()
+                            .map(move |p| Circle::new(p, 3, col.filled())),
+                    )
+                    .map_err(draw_err($title))?;
+                }
+            }
             let anno = match s.style {
                 SeriesStyle::Line => c.draw_series(LineSeries::new(pts, style)),
                 SeriesStyle::Dashed => c.draw_series(DashedLineSeries::new(pts, 8, 5, style)),

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 pub mod batch;
 pub mod calibrate;
+pub mod common;
 pub mod inspect;
 pub mod log;
 pub mod methods;
@@ -28,6 +29,8 @@ pub struct Cli {
     pub command: Option<Command>,
 }
 
+// Parsed once at start-up; boxing the larger variants buys nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Simulate the mechanism (kinematic, ideal or clearance-joint model).

@@ -1,18 +1,390 @@
-//! `pinsight simulate` (in progress).
+//! `pinsight simulate`: one run, an ensemble, or the demo summary.
 
+use super::common::ParamArgs;
+use crate::model::params::Params;
+use crate::progress::{Progress, ProgressBarGuard};
+use crate::sim::ensemble::{EnsembleResult, run_ensemble};
+use crate::sim::fidelity::{FidelityReport, SceneResolution, assess};
+use crate::sim::{Level, LevelChoice, SimOptions, SimResult, simulate};
+use crate::solver::Method;
+use anyhow::{Context, anyhow};
+use serde_json::{Value, json};
+use std::io::Write;
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Preset.
-    #[arg(long, default_value = "paper")]
-    pub preset: String,
+    #[command(flatten)]
+    pub params: ParamArgs,
+    /// Fidelity level: auto (cheapest sufficient), kinematic, ideal or clearance.
+    #[arg(long, default_value = "clearance")]
+    pub level: String,
+    /// Integrator: rk4, dopri5, dop853 or radau5.
+    #[arg(long, default_value = "dop853")]
+    pub method: String,
+    /// Relative tolerance (adaptive methods).
+    #[arg(long, default_value_t = 1e-8)]
+    pub rtol: f64,
+    /// Absolute tolerance, SI (m, m/s).
+    #[arg(long, default_value_t = 1e-14)]
+    pub atol: f64,
+    /// Fixed step in seconds (RK4: default period/20000; adaptive methods: turns error control off).
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Warm-up revolutions before the reported window (fractional allowed).
+    #[arg(long, default_value_t = 2.0)]
+    pub warmup: f64,
+    /// Reported revolutions (fractional allowed). `--warmup 0 --revs 0.5` is the deterministic window.
+    #[arg(long, default_value_t = 3.0)]
+    pub revs: f64,
+    /// Run N realisations from start offsets k·1 nm and report statistics of every figure.
+    #[arg(long, value_name = "N")]
+    pub ensemble: Option<usize>,
+    /// Also estimate the prediction horizon (two realisations 1 nm apart).
+    #[arg(long)]
+    pub horizon: bool,
+    /// Write the reported revolutions on a 0.5° crank-angle grid as CSV.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Crank-angle spacing of the CSV grid in degrees.
+    #[arg(long, default_value_t = 0.5)]
+    pub grid_deg: f64,
+    /// Stroke resolution of the scene for `--level auto`, mm.
+    #[arg(long, default_value_t = 0.002)]
+    pub resolution_mm: f64,
+    /// Force resolution of the scene for `--level auto`, N.
+    #[arg(long, default_value_t = 0.05)]
+    pub force_resolution_n: f64,
+    /// Print one JSON object instead of the text summary.
+    #[arg(long)]
+    pub json: bool,
 }
 
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("`simulate` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let p = args.params.resolve()?;
+    let method = Method::parse(&args.method).ok_or_else(|| {
+        anyhow!(
+            "invalid --method `{}` (allowed: rk4, dopri5, dop853, radau5)",
+            args.method
+        )
+    })?;
+    let choice = LevelChoice::parse(&args.level).ok_or_else(|| {
+        anyhow!(
+            "invalid --level `{}` (allowed: auto, kinematic, ideal, clearance)",
+            args.level
+        )
+    })?;
+    let fidelity = match choice {
+        LevelChoice::Auto => Some(assess(
+            &p,
+            SceneResolution {
+                stroke_mm: args.resolution_mm,
+                force_n: args.force_resolution_n,
+                needs_forces: true,
+            },
+            method,
+        )?),
+        LevelChoice::Fixed(_) => None,
+    };
+    let level = match (&fidelity, choice) {
+        (Some(f), _) => f.chosen,
+        (None, LevelChoice::Fixed(l)) => l,
+        (None, LevelChoice::Auto) => Level::Clearance,
+    };
+    let opts = SimOptions {
+        level,
+        method,
+        rtol: args.rtol,
+        atol: args.atol,
+        step: args.step,
+        warmup: args.warmup,
+        revs: args.revs,
+        grid_deg: args.csv.as_ref().map(|_| args.grid_deg),
+        record_events: true,
+        ..SimOptions::default()
+    };
+    opts.validate()?;
+    let progress = Progress::new(1000);
+    let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "simulate"));
+    let result = simulate(&p, &opts, &progress)?;
+    let ensemble = match args.ensemble {
+        Some(n) if n > 1 && level == Level::Clearance => {
+            Some(run_ensemble(&p, &opts, n, 1e-9, args.horizon, &progress)?)
+        }
+        _ => None,
+    };
+    let horizon = match (&ensemble, args.horizon && level == Level::Clearance) {
+        (Some(e), _) => e.horizon,
+        (None, true) => Some(crate::sim::ensemble::prediction_horizon(&p, &opts, 1e-9)?),
+        _ => None,
+    };
+    drop(_bar);
+    if let (Some(path), Some(curves)) = (&args.csv, &result.curves) {
+        let f =
+            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        curves
+            .write_csv(std::io::BufWriter::new(f))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        let v = to_json(
+            &p,
+            &result,
+            ensemble.as_ref(),
+            horizon.as_ref(),
+            fidelity.as_ref(),
+        );
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let mut out = std::io::stdout().lock();
+        write_text(
+            &mut out,
+            &p,
+            &opts,
+            &result,
+            ensemble.as_ref(),
+            horizon.as_ref(),
+            fidelity.as_ref(),
+        )?;
+        if let Some(path) = &args.csv {
+            writeln!(
+                out,
+                "curves: {} ({} rows)",
+                path.display(),
+                result.curves.as_ref().map_or(0, |c| c.len())
+            )?;
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
+/// The `--json` object: every summary field at the top level (ensemble
+/// means when an ensemble ran), plus notes, events count, ensemble block,
+/// horizon and the fidelity report.
+pub fn to_json(
+    p: &Params,
+    r: &SimResult,
+    ensemble: Option<&EnsembleResult>,
+    horizon: Option<&crate::sim::ensemble::Horizon>,
+    fidelity: Option<&FidelityReport>,
+) -> Value {
+    let mut v = serde_json::to_value(&r.summary).unwrap_or(Value::Null);
+    if let Value::Object(m) = &mut v {
+        m.insert("offset_mm".into(), json!(p.offset * 1e3));
+        m.insert("notes".into(), json!(r.notes));
+        if let Some(e) = ensemble {
+            for f in &e.figures {
+                if f.figure == "impacts_per_rev" {
+                    continue;
+                }
+                m.insert(f.figure.clone(), json!(f.stats.mean));
+            }
+            m.insert(
+                "n_impacts".into(),
+                json!(e.stats("impacts_per_rev").map(|s| s.mean * r.summary.revs)),
+            );
+            m.insert("steps".into(), json!(e.steps));
+            m.insert("rhs_evals".into(), json!(e.rhs_evals));
+            m.insert("wall_ms".into(), json!(e.wall_ms));
+            m.insert(
+                "view".into(),
+                json!(format!("ensemble mean of {} realisations", e.realisations)),
+            );
+            m.insert(
+                "ensemble".into(),
+                json!({
+                    "realisations": e.realisations,
+                    "perturbation_m": e.perturbation_m,
+                    "figures": e.figures,
+                }),
+            );
+        }
+        if let Some(h) = horizon {
+            m.insert("horizon".into(), json!(h));
+        }
+        if let Some(f) = fidelity {
+            m.insert("fidelity".into(), json!(f));
+        }
+    }
+    v
+}
+
+fn fmt_opt(x: Option<f64>, prec: usize) -> String {
+    x.map(|v| format!("{v:.prec$}"))
+        .unwrap_or_else(|| "–".into())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_text<W: Write>(
+    out: &mut W,
+    p: &Params,
+    opts: &SimOptions,
+    r: &SimResult,
+    ensemble: Option<&EnsembleResult>,
+    horizon: Option<&crate::sim::ensemble::Horizon>,
+    fidelity: Option<&FidelityReport>,
+) -> std::io::Result<()> {
+    let s = &r.summary;
+    writeln!(
+        out,
+        "pinsight simulate — preset {}, level {} ({}), {} rpm, clearance {:.3} mm, {}, {} (ce {})",
+        s.preset,
+        s.level,
+        if s.level == "clearance" {
+            format!("{} rtol {:.0e}", s.method, s.rtol)
+        } else {
+            "closed form".into()
+        },
+        p.motor_rpm,
+        s.clearance_mm,
+        s.material,
+        s.contact_model,
+        p.restitution
+    )?;
+    if let Some(f) = fidelity {
+        writeln!(out, "level auto → {}: {}", f.chosen.name(), f.reason)?;
+    }
+    writeln!(
+        out,
+        "window: {} warm-up + {} reported revolutions — {}",
+        opts.warmup, opts.revs, s.view
+    )?;
+    if s.view == "single realisation" {
+        writeln!(
+            out,
+            "  the clearance motion is chaotic: this is one trajectory; compare statistics (--ensemble N), not values"
+        )?;
+    }
+    let row = |out: &mut W, name: &str, v: String, ideal: String| {
+        writeln!(out, "  {name:<30} {v:>16} {ideal:>16}")
+    };
+    writeln!(out, "  {:<30} {:>16} {:>16}", "figure", "value", "ideal")?;
+    row(out, "impacts", s.n_impacts.to_string(), "0".into())?;
+    row(
+        out,
+        "peak |acceleration| (m/s²)",
+        format!("{:.3}", s.peak_accel_mps2),
+        format!("{:.3}", s.ideal_peak_accel_mps2),
+    )?;
+    row(
+        out,
+        "peak contact force (N)",
+        format!("{:.3}", s.peak_contact_force_n),
+        "–".into(),
+    )?;
+    row(
+        out,
+        "mean |Δs| (mm)",
+        format!("{:.6}", s.disp_dev_mean_mm),
+        "0".into(),
+    )?;
+    row(
+        out,
+        "max |Δs| (mm)",
+        format!("{:.6}", s.disp_dev_max_mm),
+        "0".into(),
+    )?;
+    row(
+        out,
+        "mean |Δv| (m/s)",
+        format!("{:.6}", s.vel_dev_mean_mps),
+        "0".into(),
+    )?;
+    row(
+        out,
+        "max |Δv| (m/s)",
+        format!("{:.6}", s.vel_dev_max_mps),
+        "0".into(),
+    )?;
+    row(
+        out,
+        "peak |M12| (N·m)",
+        fmt_opt(s.peak_torque_nm, 4),
+        fmt_opt(s.ideal_peak_torque_nm, 4),
+    )?;
+    row(
+        out,
+        "RMS ΔM12 (N·m)",
+        fmt_opt(s.torque_dev_rms_nm, 4),
+        "0".into(),
+    )?;
+    row(
+        out,
+        "stroke min / max (mm)",
+        format!("{:.4} / {:.4}", s.stroke_min_mm, s.stroke_max_mm),
+        "".into(),
+    )?;
+    row(
+        out,
+        "peak load-cell force (N)",
+        fmt_opt(s.peak_process_force_n, 3),
+        "".into(),
+    )?;
+    writeln!(
+        out,
+        "work: {} steps ({} rejected), {} rhs + {} aux evaluations, {:.2} ms",
+        s.steps, s.rejected_steps, s.rhs_evals, s.aux_evals, s.wall_ms
+    )?;
+    if let Some(e) = ensemble {
+        writeln!(
+            out,
+            "ensemble: {} realisations (start offsets k·{:.0e} m), {:.1} ms",
+            e.realisations, e.perturbation_m, e.wall_ms
+        )?;
+        writeln!(
+            out,
+            "  {:<24} {:>14} {:>12} {:>14} {:>14}",
+            "figure", "mean", "std", "min", "max"
+        )?;
+        for f in &e.figures {
+            let st = f.stats;
+            writeln!(
+                out,
+                "  {:<24} {:>14.6} {:>12.4e} {:>14.6} {:>14.6}",
+                f.figure, st.mean, st.std, st.min, st.max
+            )?;
+        }
+    }
+    if let Some(h) = horizon {
+        match h.revs {
+            Some(n) => writeln!(
+                out,
+                "prediction horizon: {n:.2} revolutions (realisations {:.0e} m apart differ by {:.4} mm at rtol {:.0e})",
+                h.perturbation_m, h.threshold_mm, h.rtol
+            )?,
+            None => writeln!(
+                out,
+                "prediction horizon: > {} revolutions (no separation by {:.4} mm)",
+                h.span_revs, h.threshold_mm
+            )?,
+        }
+    }
+    for n in &r.notes {
+        writeln!(out, "note: {n}")?;
+    }
+    Ok(())
+}
+
+/// `pinsight` with no arguments (no TTY): the demo summary — the paper
+/// preset over the default protocol, with its prediction horizon.
 pub fn run_demo() -> anyhow::Result<ExitCode> {
-    anyhow::bail!("the demo is not implemented yet")
+    let p = Params::paper();
+    let opts = SimOptions {
+        record_events: true,
+        ..SimOptions::default()
+    };
+    let r = simulate(&p, &opts, &Progress::hidden())?;
+    let h = crate::sim::ensemble::prediction_horizon(&p, &opts, 1e-9)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "pinsight demo (embedded): the `paper` pin-insertion head at 1200 rpm"
+    )?;
+    write_text(&mut out, &p, &opts, &r, None, Some(&h), None)?;
+    writeln!(
+        out,
+        "\nrun `pinsight --help` for the commands (simulate, sweep, log, overlay, inspect, yield, …)"
+    )?;
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,13 +1,233 @@
-//! `pinsight sweep` (not yet implemented).
+//! `pinsight sweep`: the paper's study (clearance × speed × material).
 
+use super::common::{ParamArgs, parse_list_f64};
+use crate::plot::write_png;
+use crate::progress::{Progress, ProgressBarGuard};
+use crate::sim::ensemble::{FIGURES, figure};
+use crate::sim::sweep::{Factor, SweepGrid, SweepResult, run_sweep};
+use crate::sim::{Level, SimOptions};
+use crate::solver::Method;
+use anyhow::{Context, anyhow};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Inputs.
-    pub inputs: Vec<String>,
+    #[command(flatten)]
+    pub params: ParamArgs,
+    /// Clearances in mm, comma-separated (default 0.1,0.3,0.5,0.8).
+    #[arg(long)]
+    pub clearances: Option<String>,
+    /// Motor speeds in rpm, comma-separated (default 1000,1200,1500,1800,2000).
+    #[arg(long)]
+    pub speeds: Option<String>,
+    /// Materials, comma-separated (default: all five).
+    #[arg(long)]
+    pub materials: Option<String>,
+    /// A TOML grid file (clearances_mm, speeds_rpm, materials); command-line lists override it.
+    #[arg(long, value_name = "FILE")]
+    pub grid: Option<PathBuf>,
+    /// Integrator.
+    #[arg(long, default_value = "dop853")]
+    pub method: String,
+    #[arg(long, default_value_t = 1e-8)]
+    pub rtol: f64,
+    #[arg(long, default_value_t = 1e-14)]
+    pub atol: f64,
+    #[arg(long, default_value_t = 2.0)]
+    pub warmup: f64,
+    #[arg(long, default_value_t = 3.0)]
+    pub revs: f64,
+    /// Output directory for sweep.csv, sweep.json and the PNG charts.
+    #[arg(long, default_value = "pinsight-sweep")]
+    pub out: PathBuf,
+    /// Skip the PNG charts.
+    #[arg(long)]
+    pub no_charts: bool,
+    /// Print the JSON table on stdout as well.
+    #[arg(long)]
+    pub json: bool,
 }
 
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("`sweep` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let base = args.params.resolve()?;
+    let mut grid = match &args.grid {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading grid file {}", path.display()))?;
+            SweepGrid::from_toml_str(&text)
+                .map_err(|e| anyhow!("grid file {}: {e}", path.display()))?
+        }
+        None => SweepGrid::default(),
+    };
+    if let Some(s) = &args.clearances {
+        grid.clearances_mm = parse_list_f64(s, "--clearances")?;
+    }
+    if let Some(s) = &args.speeds {
+        grid.speeds_rpm = parse_list_f64(s, "--speeds")?;
+    }
+    if let Some(s) = &args.materials {
+        grid.materials = s
+            .split(',')
+            .map(|x| x.trim().to_string())
+            .filter(|x| !x.is_empty())
+            .collect();
+    }
+    grid.validate().map_err(|e| anyhow!("sweep grid: {e}"))?;
+    let method = Method::parse(&args.method).ok_or_else(|| {
+        anyhow!(
+            "invalid --method `{}` (allowed: rk4, dopri5, dop853, radau5)",
+            args.method
+        )
+    })?;
+    let opts = SimOptions {
+        level: Level::Clearance,
+        method,
+        rtol: args.rtol,
+        atol: args.atol,
+        warmup: args.warmup,
+        revs: args.revs,
+        ..SimOptions::default()
+    };
+    opts.validate()?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let progress = Progress::new(grid.len() as u64);
+    let result = {
+        let _bar = ProgressBarGuard::start(progress.clone(), "sweep");
+        run_sweep(&base, &grid, &opts, &progress)
+    };
+    // Write every result we have, then the charts.
+    let csv_path = args.out.join("sweep.csv");
+    write_csv(&csv_path, &result)?;
+    let json_path = args.out.join("sweep.json");
+    let json = serde_json::to_string_pretty(&result)?;
+    std::fs::write(&json_path, &json)
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    let mut charts = Vec::new();
+    if !args.no_charts {
+        for f in Factor::ALL {
+            let path = args.out.join(format!("curves_{}.png", f.name()));
+            write_png(&path, &result.curve_panels(f), 2, 1600, 1100)?;
+            charts.push(path);
+            let path = args.out.join(format!("bars_{}.png", f.name()));
+            write_png(&path, &result.bar_panels(f), 2, 1400, 550)?;
+            charts.push(path);
+        }
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        let mut out = std::io::stdout().lock();
+        writeln!(
+            out,
+            "pinsight sweep — preset {}, {} cases ({} clearances × {} speeds × {} materials), {} rtol {:.0e}, {} + {} revolutions",
+            result.preset,
+            result.cases.len(),
+            grid.clearances_mm.len(),
+            grid.speeds_rpm.len(),
+            grid.materials.len(),
+            result.method,
+            result.rtol,
+            result.warmup_revs,
+            result.revs
+        )?;
+        writeln!(
+            out,
+            "nominal: c = {} mm, {} rpm, {}; wall {:.0} ms; {} failed",
+            result.nominal.clearance_mm,
+            result.nominal.motor_rpm,
+            result.nominal.material,
+            result.wall_ms,
+            result.failed
+        )?;
+        writeln!(
+            out,
+            "{:>8} {:>7} {:<17} {:>8} {:>11} {:>11} {:>10}",
+            "c_mm", "rpm", "material", "impacts", "mean|Δs|mm", "mean|Δv|m/s", "peak M Nm"
+        )?;
+        for c in &result.cases {
+            match (&c.summary, &c.error) {
+                (Some(s), _) => writeln!(
+                    out,
+                    "{:>8} {:>7} {:<17} {:>8} {:>11.5} {:>11.5} {:>10.4}",
+                    c.clearance_mm,
+                    c.motor_rpm,
+                    c.material,
+                    s.n_impacts,
+                    s.disp_dev_mean_mm,
+                    s.vel_dev_mean_mps,
+                    s.peak_torque_nm.unwrap_or(f64::NAN)
+                )?,
+                (None, Some(e)) => writeln!(
+                    out,
+                    "{:>8} {:>7} {:<17} error: {e}",
+                    c.clearance_mm, c.motor_rpm, c.material
+                )?,
+                (None, None) => {}
+            }
+        }
+        writeln!(
+            out,
+            "wrote {} and {}",
+            csv_path.display(),
+            json_path.display()
+        )?;
+        for c in &charts {
+            writeln!(out, "chart: {}", c.display())?;
+        }
+    }
+    Ok(if result.failed > 0 {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn write_csv(path: &Path, r: &SweepResult) -> anyhow::Result<()> {
+    let mut f = std::io::BufWriter::new(
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?,
+    );
+    write!(f, "clearance_mm,motor_rpm,material,status")?;
+    for name in FIGURES {
+        write!(f, ",{name}")?;
+    }
+    writeln!(f, ",n_impacts,steps,rejected_steps,rhs_evals,wall_ms,error")?;
+    for c in &r.cases {
+        write!(
+            f,
+            "{},{},{},{}",
+            c.clearance_mm,
+            c.motor_rpm,
+            c.material,
+            if c.error.is_some() { "error" } else { "ok" }
+        )?;
+        for name in FIGURES {
+            match &c.summary {
+                Some(s) => {
+                    let v = figure(s, name);
+                    if v.is_finite() {
+                        write!(f, ",{v}")?
+                    } else {
+                        write!(f, ",")?
+                    }
+                }
+                None => write!(f, ",")?,
+            }
+        }
+        match &c.summary {
+            Some(s) => write!(
+                f,
+                ",{},{},{},{},{:.3}",
+                s.n_impacts, s.steps, s.rejected_steps, s.rhs_evals, s.wall_ms
+            )?,
+            None => write!(f, ",,,,,")?,
+        }
+        let err = c.error.as_deref().unwrap_or("").replace(['"', '\n'], " ");
+        writeln!(f, ",\"{err}\"")?;
+    }
+    f.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
 }

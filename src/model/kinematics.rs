@@ -23,13 +23,22 @@ pub struct Geometry {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Pose {
     pub theta2: f64,
-    pub theta3: f64,
+    /// sin θ3 and cos θ3 (θ3 itself by [`Pose::theta3`]).
+    pub s3: f64,
+    pub c3: f64,
     pub omega3: f64,
     pub alpha3: f64,
     /// Pin bar position x4 (m), velocity (m/s), acceleration (m/s²).
     pub x4: f64,
     pub v4: f64,
     pub a4: f64,
+}
+
+impl Pose {
+    /// The rod angle θ3; cos θ3 > 0 (B lies to the +x side of A), so θ3 = asin(sin θ3).
+    pub fn theta3(&self) -> f64 {
+        self.s3.asin()
+    }
 }
 
 impl Geometry {
@@ -75,11 +84,18 @@ impl Geometry {
     #[inline]
     pub fn pose(&self, theta2: f64, omega2: f64, alpha2: f64) -> Pose {
         let (s2, c2) = theta2.sin_cos();
+        self.pose_sc(theta2, s2, c2, omega2, alpha2)
+    }
+
+    /// [`Geometry::pose`] with sin θ2 and cos θ2 given.
+    #[inline]
+    pub fn pose_sc(&self, theta2: f64, s2: f64, c2: f64, omega2: f64, alpha2: f64) -> Pose {
         let Geometry { r, l, offset } = *self;
         let s3 = (offset - r * s2) / l;
         let c3 = (1.0 - s3 * s3).sqrt();
-        let theta3 = s3.atan2(c3);
-        let omega3 = -r * c2 * omega2 / (l * c3);
+        let inv_lc3 = 1.0 / (l * c3);
+
+        let omega3 = -r * c2 * omega2 * inv_lc3;
         let alpha3 =
             (r * s2 * omega2 * omega2 - r * c2 * alpha2 + l * s3 * omega3 * omega3) / (l * c3);
         let x4 = r * c2 + l * c3;
@@ -90,7 +106,8 @@ impl Geometry {
             - l * s3 * alpha3;
         Pose {
             theta2,
-            theta3,
+            s3,
+            c3,
             omega3,
             alpha3,
             x4,
@@ -147,7 +164,7 @@ mod tests {
             let t = 1e-4 * i as f64;
             let th = |t: f64| 0.3 + w * t + 0.5 * a * t * t;
             let x = |t: f64| g.pose(th(t), 0.0, 0.0).x4;
-            let th3 = |t: f64| g.pose(th(t), 0.0, 0.0).theta3;
+            let th3 = |t: f64| g.pose(th(t), 0.0, 0.0).theta3();
             let h = 1e-7;
             let p = g.pose(th(t), w + a * t, a);
             let v_num = (x(t + h) - x(t - h)) / (2.0 * h);

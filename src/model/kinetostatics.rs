@@ -53,6 +53,12 @@ impl Inertia {
     #[inline]
     pub fn drive_torque(&self, r: f64, theta2: f64, alpha2: f64, f_a: [f64; 2]) -> f64 {
         let (s2, c2) = theta2.sin_cos();
+        self.drive_torque_sc(r, s2, c2, alpha2, f_a)
+    }
+
+    /// [`Inertia::drive_torque`] with sin θ2 and cos θ2 given.
+    #[inline]
+    pub fn drive_torque_sc(&self, r: f64, s2: f64, c2: f64, alpha2: f64, f_a: [f64; 2]) -> f64 {
         let a = [r * c2, r * s2];
         let g2 = [self.lc2 * c2, self.lc2 * s2];
         self.i_o() * alpha2 + cross(a, f_a) - cross(g2, [self.m2 * self.g[0], self.m2 * self.g[1]])
@@ -69,6 +75,19 @@ impl Inertia {
         alpha3: f64,
     ) -> [f64; 2] {
         let (s3, c3) = theta3.sin_cos();
+        self.rod_centroid_accel_sc(a_a, s3, c3, omega3, alpha3)
+    }
+
+    /// [`Inertia::rod_centroid_accel`] with sin θ3 and cos θ3 given.
+    #[inline]
+    pub fn rod_centroid_accel_sc(
+        &self,
+        a_a: [f64; 2],
+        s3: f64,
+        c3: f64,
+        omega3: f64,
+        alpha3: f64,
+    ) -> [f64; 2] {
         [
             a_a[0] + self.lc3 * (-alpha3 * s3 - omega3 * omega3 * c3),
             a_a[1] + self.lc3 * (alpha3 * c3 - omega3 * omega3 * s3),
@@ -131,21 +150,27 @@ impl Kinetostatics {
 
     /// Forces at crank angle θ2, speed ω2 and acceleration α2.
     pub fn at(&self, theta2: f64, omega2: f64, alpha2: f64) -> IdealForces {
-        let pose = self.geom.pose(theta2, omega2, alpha2);
+        let (s2, c2) = theta2.sin_cos();
+        self.at_sc(theta2, s2, c2, omega2, alpha2)
+    }
+
+    /// [`Kinetostatics::at`] with sin θ2 and cos θ2 given.
+    #[inline(always)]
+    pub fn at_sc(&self, theta2: f64, s2: f64, c2: f64, omega2: f64, alpha2: f64) -> IdealForces {
+        let pose = self.geom.pose_sc(theta2, s2, c2, omega2, alpha2);
         let Inertia {
             m3, i3, lc3, m4, g, ..
         } = self.inertia;
         let r = self.geom.r;
         let l = self.geom.l;
-        let (s2, c2) = theta2.sin_cos();
-        let (s3, c3) = pose.theta3.sin_cos();
+        let (s3, c3) = (pose.s3, pose.c3);
         let a_a = [
             -r * omega2 * omega2 * c2 - r * alpha2 * s2,
             -r * omega2 * omega2 * s2 + r * alpha2 * c2,
         ];
         let a_g3 = self
             .inertia
-            .rod_centroid_accel(a_a, pose.theta3, pose.omega3, pose.alpha3);
+            .rod_centroid_accel_sc(a_a, s3, c3, pose.omega3, pose.alpha3);
         // Rod moments about A: (B − A) × F_B = I3 α3 + (G3 − A) × m3 (a_G3 − g).
         let rg = [lc3 * c3, lc3 * s3];
         let r1 = i3 * pose.alpha3 + cross(rg, [m3 * (a_g3[0] - g[0]), m3 * (a_g3[1] - g[1])]);
@@ -174,7 +199,7 @@ impl Kinetostatics {
             m3 * a_g3[0] - f_b[0] - m3 * g[0],
             m3 * a_g3[1] - f_b[1] - m3 * g[1],
         ];
-        let m12 = self.inertia.drive_torque(r, theta2, alpha2, f_a);
+        let m12 = self.inertia.drive_torque_sc(r, s2, c2, alpha2, f_a);
         let m2 = self.inertia.m2;
         let lc2 = self.inertia.lc2;
         let a_g2 = [
@@ -205,7 +230,7 @@ impl Kinetostatics {
         } = self.inertia;
         let r = self.geom.r;
         let (s2, c2) = theta2.sin_cos();
-        let (s3, c3) = pose.theta3.sin_cos();
+        let (s3, c3) = (pose.s3, pose.c3);
         let v_g3 = [
             -r * omega2 * s2 - lc3 * pose.omega3 * s3,
             r * omega2 * c2 + lc3 * pose.omega3 * c3,
@@ -230,7 +255,7 @@ impl Kinetostatics {
         } = self.inertia;
         let r = self.geom.r;
         let (s2, c2) = theta2.sin_cos();
-        let (s3, c3) = pose.theta3.sin_cos();
+        let (s3, c3) = (pose.s3, pose.c3);
         let v_g2 = [-lc2 * omega2 * s2, lc2 * omega2 * c2];
         let v_g3 = [
             -r * omega2 * s2 - lc3 * pose.omega3 * s3,

@@ -1,5 +1,7 @@
 //! Mechanism model: parameters, presets, kinematics, kinetostatics, contact, clearance ODE.
 
+pub mod clearance;
+
 pub mod contact;
 pub mod kinematics;
 pub mod kinetostatics;

@@ -1,1 +1,271 @@
-//! (in progress)
+//! The simulation protocol: warm-up revolutions, then the reported window;
+//! summary figures, curves on a crank-angle grid, contact events, work.
+//!
+//! Entry point: [`simulate`]. Levels `kinematic` and `ideal` are closed form
+//! evaluated on the crank-angle grid (their peaks refined by Brent's method);
+//! `clearance` integrates the contact-impact model with event location
+//! ([`clearance_run`]). Because the clearance motion is chaotic
+//! (model.md), a single run past the first revolution is one realisation;
+//! [`ensemble`] gives the statistics and the prediction horizon.
+
+pub mod clearance_run;
+pub mod curves;
+pub mod ensemble;
+pub mod fidelity;
+pub mod ideal_run;
+pub mod summary;
+pub mod sweep;
+
+use crate::model::params::{Driver, Params};
+use crate::progress::Progress;
+use crate::solver::{Method, Stats, StepError};
+use serde::{Deserialize, Serialize};
+
+pub use curves::Curves;
+pub use summary::Summary;
+
+/// Fidelity level (model.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum Level {
+    Kinematic,
+    Ideal,
+    Clearance,
+    Motor,
+}
+
+impl Level {
+    pub fn name(self) -> &'static str {
+        match self {
+            Level::Kinematic => "kinematic",
+            Level::Ideal => "ideal",
+            Level::Clearance => "clearance",
+            Level::Motor => "motor",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.trim() {
+            "kinematic" => Some(Level::Kinematic),
+            "ideal" => Some(Level::Ideal),
+            "clearance" => Some(Level::Clearance),
+            "motor" => Some(Level::Motor),
+            _ => None,
+        }
+    }
+}
+
+/// Level requested: a fixed one, or `auto` (the cheapest sufficient one, see [`fidelity`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LevelChoice {
+    Auto,
+    Fixed(Level),
+}
+
+impl LevelChoice {
+    pub fn parse(s: &str) -> Option<Self> {
+        if s.trim() == "auto" {
+            Some(LevelChoice::Auto)
+        } else {
+            Level::parse(s).map(LevelChoice::Fixed)
+        }
+    }
+}
+
+/// How to run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SimOptions {
+    pub level: Level,
+    pub method: Method,
+    pub rtol: f64,
+    /// Absolute tolerance (SI: m for positions, m/s for velocities).
+    pub atol: f64,
+    /// Fixed step (s): required meaning for RK4 (default period/20 000 when
+    /// None); for the adaptive methods a given step switches error control off.
+    pub step: Option<f64>,
+    /// Warm-up revolutions (may be fractional).
+    pub warmup: f64,
+    /// Reported revolutions (may be fractional).
+    pub revs: f64,
+    /// Crank-angle spacing of the output curves in degrees (None: no curves).
+    pub grid_deg: Option<f64>,
+    /// Event location tolerance on |δ|, relative to the clearance.
+    pub event_tol: f64,
+    /// Offset of the pin bar's initial position (m), for ensemble realisations.
+    pub perturb_x4: f64,
+    pub max_steps: u64,
+    /// Keep the list of contact events.
+    pub record_events: bool,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        Self {
+            level: Level::Clearance,
+            method: Method::Dop853,
+            rtol: 1e-8,
+            atol: 1e-14,
+            step: None,
+            warmup: 2.0,
+            revs: 3.0,
+            grid_deg: None,
+            event_tol: 1e-9,
+            perturb_x4: 0.0,
+            max_steps: 50_000_000,
+            record_events: false,
+        }
+    }
+}
+
+impl SimOptions {
+    /// The deterministic window of model.md: from the start, half a revolution.
+    pub fn deterministic_window(rtol: f64) -> Self {
+        Self {
+            warmup: 0.0,
+            revs: 0.5,
+            rtol,
+            record_events: true,
+            ..Self::default()
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), SimError> {
+        let bad = |what: &str, v: String, allowed: &str| {
+            Err(SimError::Options(format!(
+                "invalid {what}: {v} (allowed: {allowed})"
+            )))
+        };
+        if !(self.rtol > 0.0 && self.rtol < 1.0) {
+            return bad("rtol", self.rtol.to_string(), "0 < rtol < 1");
+        }
+        if !(self.atol >= 0.0) || !self.atol.is_finite() {
+            return bad("atol", self.atol.to_string(), "≥ 0");
+        }
+        if let Some(h) = self.step {
+            if !(h > 0.0) || !h.is_finite() {
+                return bad("step", h.to_string(), "> 0 s");
+            }
+        }
+        if !(self.warmup >= 0.0) || !self.warmup.is_finite() {
+            return bad("warmup", self.warmup.to_string(), "≥ 0 revolutions");
+        }
+        if !(self.revs > 0.0) || !self.revs.is_finite() || self.revs > 1e6 {
+            return bad("revs", self.revs.to_string(), "0 < revs ≤ 1e6 revolutions");
+        }
+        if let Some(g) = self.grid_deg {
+            if !(g > 0.0) || g > 360.0 {
+                return bad("grid", g.to_string(), "0 < grid ≤ 360 degrees");
+            }
+            let n = self.revs * 360.0 / g;
+            if n > 5e7 {
+                return bad("grid", format!("{n:.0} points"), "at most 5e7 points");
+            }
+        }
+        if !(self.event_tol > 0.0 && self.event_tol <= 1e-5) {
+            return bad(
+                "event_tol",
+                self.event_tol.to_string(),
+                "0 < event_tol ≤ 1e-5 (relative to c)",
+            );
+        }
+        Ok(())
+    }
+
+    /// Whether this run is the deterministic window or one realisation.
+    pub fn view(&self) -> &'static str {
+        if self.warmup == 0.0 && self.revs <= 1.0 {
+            "deterministic window"
+        } else {
+            "single realisation"
+        }
+    }
+}
+
+/// A located contact event.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ContactEvent {
+    /// true: onset (impact), false: loss of contact.
+    pub onset: bool,
+    pub t_s: f64,
+    pub crank_deg: f64,
+    /// Penetration rate at the event (m/s): the approach velocity at an onset.
+    pub delta_dot_mps: f64,
+    /// |δ| at the located point, relative to the clearance.
+    pub residual_rel: f64,
+    pub in_report: bool,
+}
+
+/// The result of one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimResult {
+    pub summary: Summary,
+    pub curves: Option<Curves>,
+    pub events: Vec<ContactEvent>,
+    pub stats: Stats,
+    /// Remarks for the user (level fallbacks, guards that fired …).
+    pub notes: Vec<String>,
+}
+
+/// Why a simulation could not run or finish.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum SimError {
+    #[error(transparent)]
+    Params(#[from] crate::model::params::ParamError),
+    #[error("{0}")]
+    Options(String),
+    #[error("{0}")]
+    Unsupported(String),
+    #[error(
+        "integration failed at t = {t:.9} s (crank angle {crank_deg:.3}°, penetration {penetration_um:.4} µm, {mode}): {source}"
+    )]
+    Integration {
+        source: StepError,
+        t: f64,
+        crank_deg: f64,
+        penetration_um: f64,
+        mode: &'static str,
+    },
+    #[error(
+        "too many contact events ({0}) — the contact chatters; loosen event tolerance or check parameters"
+    )]
+    EventStorm(u64),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// Runs one simulation at the level in `opts`.
+pub fn simulate(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResult, SimError> {
+    p.validate()?;
+    opts.validate()?;
+    if p.driver == Driver::Motor || opts.level == Level::Motor {
+        return Err(SimError::Unsupported(
+            "the `motor` level (crank speed ripple from a motor curve and flywheel) is not implemented yet; \
+             use driver = \"constant_speed\" with level kinematic, ideal or clearance"
+                .into(),
+        ));
+    }
+    if p.process_law == crate::model::params::ProcessLaw::Stick {
+        return Err(SimError::Unsupported(
+            "process_law = \"stick\" is not implemented yet; use \"regularized\"".into(),
+        ));
+    }
+    match opts.level {
+        Level::Kinematic | Level::Ideal => Ok(ideal_run::run(p, opts)),
+        Level::Clearance if p.clearance == 0.0 => {
+            let mut o = opts.clone();
+            o.level = Level::Ideal;
+            let mut r = ideal_run::run(p, &o);
+            r.notes.push(
+                "clearance_mm = 0: the joint is ideal, so the clearance level equals the ideal one"
+                    .into(),
+            );
+            Ok(r)
+        }
+        Level::Clearance => clearance_run::run(p, opts, progress),
+        Level::Motor => unreachable!("rejected above"),
+    }
+}
+
+/// Wraps a crank angle in radians to [0, 360) degrees.
+pub(crate) fn wrap_deg(theta: f64) -> f64 {
+    theta.to_degrees().rem_euclid(360.0)
+}

@@ -29,7 +29,7 @@ pub struct Dop853<const N: usize> {
     h_used: f64,
     facold: f64,
     rejected_last: bool,
-    fresh: bool,
+    pub(crate) fresh: bool,
     dense_ready: bool,
     rcont: [[f64; N]; 8],
     iasti: u32,

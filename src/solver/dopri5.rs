@@ -59,7 +59,7 @@ pub struct Dopri5<const N: usize> {
     pub h: f64,
     facold: f64,
     rejected_last: bool,
-    fresh: bool,
+    pub(crate) fresh: bool,
     rcont: [[f64; N]; 5],
     iasti: u32,
     nonsti: u32,

@@ -257,6 +257,14 @@ impl<const N: usize> Stepper<N> {
         dispatch!(self, s => s.reset(sys, t, y, fresh_step))
     }
 
+    /// Proposes the size of the next step (after a reset: instead of the
+    /// automatic initial-step estimate). Ignored by fixed-step runs.
+    pub fn set_next_step(&mut self, h: f64) {
+        if h > 0.0 && h.is_finite() {
+            dispatch!(self, s => if !s.cfg.fixed { s.h = h; s.fresh = false; })
+        }
+    }
+
     /// Takes one accepted step ending at most at `t_end`, no longer than `h_max`.
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         dispatch!(self, s => s.step(sys, t_end, h_max))

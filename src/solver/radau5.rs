@@ -140,7 +140,7 @@ pub struct Radau5<const N: usize> {
     hacc: f64,
     erracc: f64,
     faccon: f64,
-    fresh: bool,
+    pub(crate) fresh: bool,
     pub stats: Stats,
 }
 

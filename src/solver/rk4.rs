@@ -18,6 +18,7 @@ pub struct Rk4<const N: usize> {
     pub(crate) f_prev: [f64; N],
     pub h: f64,
     pub stats: Stats,
+    pub(crate) fresh: bool,
 }
 
 impl<const N: usize> Rk4<N> {
@@ -32,6 +33,7 @@ impl<const N: usize> Rk4<N> {
             f_prev: [0.0; N],
             h: cfg.h,
             stats: Stats::default(),
+            fresh: false,
         }
     }
 

@@ -23,8 +23,10 @@ where
 {
     // Brent's zeroin, watching every evaluated point: the first one on the
     // new side that `accept`s is returned; otherwise, once the bracket is
-    // below `t_tol`, its end on the new side.
-    let new_side = |v: f64| v == 0.0 || v.signum() == gb.signum();
+    // below `t_tol`, its end on the new side. The new side is strictly the
+    // sign of g(b): an exact zero counts as the old side, because next to a
+    // restart point g can round to 0 (e − c below the resolution of c).
+    let new_side = |v: f64| v != 0.0 && v.signum() == gb.signum();
     if accept(gb) {
         return (b, gb, 0);
     }
@@ -50,7 +52,7 @@ where
         }
         let tol1 = 2.0 * f64::EPSILON * xb.abs() + 0.5 * t_tol;
         let xm = 0.5 * (xc - xb);
-        if xm.abs() <= tol1 || fb == 0.0 {
+        if xm.abs() <= tol1 {
             break;
         }
         if e.abs() >= tol1 && fa.abs() > fb.abs() {
@@ -90,6 +92,11 @@ where
         };
         fb = g(xb);
         evals += 1;
+        if fb == 0.0 {
+            // An exact zero is not a point on the new side: keep it as the
+            // old side's end and close the bracket towards the new side.
+            fb = -gb.signum() * f64::MIN_POSITIVE;
+        }
         if new_side(fb) && accept(fb) {
             return (xb, fb, evals);
         }

@@ -1,0 +1,437 @@
+//! The clearance-joint mechanism as an ODE (level `clearance`, model.md
+//! "Equations"): constant-speed crank, free rod angle and pin-bar position,
+//! contact-impact force with friction in the rod–pin-bar joint.
+//!
+//! State y = (θ3, ω3, x4, v4, Q_s, Q_M): the last two are quadratures
+//! Q_s = ∫(s − s_ideal) dt and Q_M = ∫(M12 − M12_ideal)² dt, so that the
+//! time averages of the summary figures are integrated to the solver's
+//! accuracy at no extra evaluations. They do not feed back and are excluded
+//! from error control. The integrands are smooth: ∫|Δs| dt is assembled by
+//! the driver from Q_s between the located zeros of Δs (a kink inside a
+//! step would cost O(h²) per sign change), and ∫|Δv| dt from Δs itself
+//! between the zeros of Δv.
+//!
+//! The contact *mode* (free flight or contact, and the approach velocity at
+//! the onset) is set by the driver at located events, so that the right-hand
+//! side is smooth within every step: in free flight no contact force acts
+//! even if a step overshoots δ = 0 (the event is then located and the step
+//! cut back), in contact the force is max(0, …) of the penetration.
+
+use super::contact::{ContactLaw, ProcessLoad, coulomb};
+use super::kinematics::Geometry;
+use super::kinetostatics::{Inertia, Kinetostatics, cross};
+use super::params::Params;
+use crate::solver::System;
+use serde::Serialize;
+
+/// |(x, y)| without `hypot`'s overflow guard (glibc's `hypot` was 15 % of a
+/// simulation's time; the magnitudes here are millimetres and m/s).
+#[inline(always)]
+fn norm2(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}
+
+/// Dimension of the state.
+pub const DIM: usize = 6;
+/// Index of each state component.
+pub const THETA3: usize = 0;
+pub const OMEGA3: usize = 1;
+pub const X4: usize = 2;
+pub const V4: usize = 3;
+pub const Q_S: usize = 4;
+pub const Q_DM2: usize = 5;
+
+/// Free flight or contact, as set by the event logic.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Mode {
+    pub in_contact: bool,
+    /// δ̇ at the onset of the current contact (m/s).
+    pub approach: f64,
+}
+
+/// Everything the model knows at one instant (for outputs and figures).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Outputs {
+    pub t: f64,
+    pub theta2: f64,
+    /// Stroke s = x4 − x4_TDC (m), velocity (m/s), acceleration (m/s²).
+    pub s: f64,
+    pub v4: f64,
+    pub a4: f64,
+    pub alpha3: f64,
+    /// Contact normal force (N) and friction (N, on the pin bar along t).
+    pub f_n: f64,
+    pub f_t: f64,
+    /// Drive torque (N·m).
+    pub m12: f64,
+    /// Penetration δ = e − c (m) and its rate (m/s).
+    pub delta: f64,
+    pub delta_dot: f64,
+    /// Eccentricity e = P − B (m).
+    pub ecc: [f64; 2],
+    /// Process force on the pin bar along x (N); the load cell reads −this.
+    pub process_force: f64,
+    /// The ideal mechanism at the same crank angle.
+    pub ideal_s: f64,
+    pub ideal_v: f64,
+    pub ideal_a: f64,
+    pub ideal_m12: f64,
+    pub ideal_process_force: f64,
+}
+
+/// The clearance-joint model with its constants resolved.
+#[derive(Debug, Clone)]
+pub struct ClearanceModel {
+    pub geom: Geometry,
+    pub inertia: Inertia,
+    pub law: ContactLaw,
+    pub clearance: f64,
+    pub rb: f64,
+    pub c_f: f64,
+    pub mu_g: f64,
+    pub v0: f64,
+    pub v1: f64,
+    pub process: ProcessLoad,
+    pub omega: f64,
+    /// Crank angle at t = 0 (top dead centre).
+    pub theta0: f64,
+    pub x4_tdc: f64,
+    pub ideal: Kinetostatics,
+    /// Rod inertia about the crank pin, I3 + m3 Lc3².
+    j_a: f64,
+    inv_j_a: f64,
+    inv_m4: f64,
+    pub mode: Mode,
+    /// Whether the quadratures (and the ideal mechanism they compare with)
+    /// are evaluated. Off during warm-up, where nothing is reported: the
+    /// ideal kinetostatics is a sixth of a right-hand side's cost. When it
+    /// is off, the `ideal_*` outputs are NaN.
+    pub quadratures: bool,
+}
+
+impl ClearanceModel {
+    pub fn new(p: &Params) -> Self {
+        let geom = Geometry::of(p);
+        let inertia = Inertia::of(p);
+        Self {
+            geom,
+            inertia,
+            law: ContactLaw::of(p),
+            clearance: p.clearance,
+            rb: p.rb(),
+            c_f: p.c_f,
+            mu_g: p.mu_g,
+            v0: p.v0,
+            v1: p.v1,
+            process: ProcessLoad::of(p),
+            omega: p.omega(),
+            theta0: geom.tdc_angle(),
+            x4_tdc: geom.x4_tdc(),
+            ideal: Kinetostatics::of(p),
+            j_a: p.i3 + p.m3 * p.lc3 * p.lc3,
+            inv_j_a: 1.0 / (p.i3 + p.m3 * p.lc3 * p.lc3),
+            inv_m4: 1.0 / p.m4,
+            mode: Mode {
+                in_contact: false,
+                approach: 0.0,
+            },
+            quadratures: true,
+        }
+    }
+
+    /// Journal centred, velocities of the ideal mechanism (model.md), the pin
+    /// bar displaced by `dx4` (m) along x for ensemble realisations.
+    pub fn initial_state(&self, dx4: f64) -> [f64; DIM] {
+        let pose = self.geom.pose(self.theta0, self.omega, 0.0);
+        [pose.theta3(), pose.omega3, pose.x4 + dx4, pose.v4, 0.0, 0.0]
+    }
+
+    /// Crank angle at time t.
+    #[inline]
+    pub fn theta2(&self, t: f64) -> f64 {
+        self.theta0 + self.omega * t
+    }
+
+    /// Penetration δ and its rate from the state (cheap: no forces).
+    #[inline]
+    pub fn penetration(&self, t: f64, y: &[f64; DIM]) -> (f64, f64) {
+        let (s2, c2) = self.theta2(t).sin_cos();
+        let (s3, c3) = y[THETA3].sin_cos();
+        let r = self.geom.r;
+        let l = self.geom.l;
+        let bx = r * c2 + l * c3;
+        let by = r * s2 + l * s3;
+        let ex = y[X4] - bx;
+        let ey = self.geom.offset - by;
+        let e = norm2(ex, ey);
+        let vbx = -r * self.omega * s2 - l * y[OMEGA3] * s3;
+        let vby = r * self.omega * c2 + l * y[OMEGA3] * c3;
+        let dvx = y[V4] - vbx;
+        let dvy = -vby;
+        let dd = if e > 0.0 {
+            (dvx * ex + dvy * ey) / e
+        } else {
+            norm2(dvx, dvy)
+        };
+        (e - self.clearance, dd)
+    }
+
+    /// The ideal mechanism's x4 and v4 at time t.
+    #[inline]
+    pub fn ideal_x4_v4(&self, t: f64) -> (f64, f64) {
+        let p = self.geom.pose(self.theta2(t), self.omega, 0.0);
+        (p.x4, p.v4)
+    }
+
+    /// Relative speed of journal and bearing centres, |v_P − v_B| (m/s).
+    pub fn relative_speed(&self, t: f64, y: &[f64; DIM]) -> f64 {
+        let (s2, c2) = self.theta2(t).sin_cos();
+        let (s3, c3) = y[THETA3].sin_cos();
+        let r = self.geom.r;
+        let l = self.geom.l;
+        let vbx = -r * self.omega * s2 - l * y[OMEGA3] * s3;
+        let vby = r * self.omega * c2 + l * y[OMEGA3] * c3;
+        norm2(y[V4] - vbx, vby)
+    }
+
+    /// A first step after a contact onset with approach velocity `approach`:
+    /// the contact displacement grows like K δ̇^1.5 τ^3.5 / (8.75 m), which a
+    /// Runge–Kutta step cannot follow beyond its position tolerance `tol_pos`
+    /// (m). With the smaller of the pin bar's mass and the rod's effective
+    /// mass at B.
+    pub fn onset_step(&self, approach: f64, tol_pos: f64) -> f64 {
+        let v = approach.max(self.law.approach_floor);
+        let m_eff = self.inertia.m4.min(self.j_a / (self.geom.l * self.geom.l));
+        (tol_pos * 8.75 * m_eff / (self.law.k * v * v.sqrt())).powf(1.0 / 3.5)
+    }
+
+    /// Scale of the crank-driven relative acceleration (m/s²), for the
+    /// free-flight step limit.
+    pub fn accel_scale(&self) -> f64 {
+        let g = self.inertia.g;
+        self.geom.r * self.omega * self.omega * (1.0 + self.geom.r / self.geom.l) + g[0].hypot(g[1])
+    }
+
+    /// The full evaluation in the current mode: derivatives and outputs.
+    #[inline]
+    pub fn evaluate(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
+        self.evaluate_in(self.mode, t, y, dy)
+    }
+
+    /// The full evaluation in a given mode. Inlined into the right-hand side,
+    /// where the outputs it does not need are then never computed.
+    #[inline(always)]
+    pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
+        let theta2 = self.theta2(t);
+        let (s2, c2) = theta2.sin_cos();
+        let Geometry { r, l, offset } = self.geom;
+        let Inertia {
+            m2,
+            lc2,
+            m3,
+            lc3,
+            m4,
+            g,
+            ..
+        } = self.inertia;
+        let w = self.omega;
+        let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
+        let (s3, c3) = theta3.sin_cos();
+        // Crank pin A and the bearing centre B.
+        let a = [r * c2, r * s2];
+        let va = [-r * w * s2, r * w * c2];
+        let aa = [-r * w * w * c2, -r * w * w * s2];
+        let b = [a[0] + l * c3, a[1] + l * s3];
+        let vb = [va[0] - l * omega3 * s3, va[1] + l * omega3 * c3];
+        // Eccentricity of the journal P = (x4, offset).
+        let ecc = [x4 - b[0], offset - b[1]];
+        let e = norm2(ecc[0], ecc[1]);
+        let delta = e - self.clearance;
+        let dv = [v4 - vb[0], -vb[1]];
+        let (n, delta_dot) = if e > 0.0 {
+            let inv_e = 1.0 / e;
+            let n = [ecc[0] * inv_e, ecc[1] * inv_e];
+            (n, dv[0] * n[0] + dv[1] * n[1])
+        } else {
+            ([1.0, 0.0], norm2(dv[0], dv[1]))
+        };
+        let (f_n, f_t) = if mode.in_contact && delta > 0.0 {
+            let f_n = self.law.normal_force(delta, delta_dot, mode.approach);
+            let tt = [-n[1], n[0]];
+            let v_t = dv[0] * tt[0] + dv[1] * tt[1] - omega3 * self.rb;
+            (f_n, coulomb(self.c_f, f_n, v_t, self.v0, self.v1))
+        } else {
+            (0.0, 0.0)
+        };
+        let tt = [-n[1], n[0]];
+        // Contact force on the rod: normal along +n, friction opposite to the pin bar's.
+        let f_rod = [f_n * n[0] - f_t * tt[0], f_n * n[1] - f_t * tt[1]];
+        // Rod: moments about A.
+        let ba = [l * c3, l * s3];
+        let qa = [ba[0] + self.rb * n[0], ba[1] + self.rb * n[1]];
+        let u3 = [c3, s3];
+        let moment = cross(ba, [f_n * n[0], f_n * n[1]])
+            + cross(qa, [-f_t * tt[0], -f_t * tt[1]])
+            + lc3 * m3 * cross(u3, g)
+            - m3 * lc3 * cross(u3, aa);
+        let alpha3 = moment * self.inv_j_a;
+        // Pin bar.
+        let s = x4 - self.x4_tdc;
+        let f_pin_y = -f_rod[1];
+        let n_g = (f_pin_y + m4 * g[1]).abs();
+        let f_guide = coulomb(self.mu_g, n_g, v4, self.v0, self.v1);
+        let f_proc = self.process.force(s, v4);
+        let a4 = (-f_rod[0] + f_guide + f_proc) * self.inv_m4 + g[0];
+        // Drive torque from the crank's balance: F_A = m3 a_G3 − F_rod − m3 g.
+        let a_g3 = self
+            .inertia
+            .rod_centroid_accel_sc(aa, s3, c3, omega3, alpha3);
+        let f_a = [
+            m3 * a_g3[0] - f_rod[0] - m3 * g[0],
+            m3 * a_g3[1] - f_rod[1] - m3 * g[1],
+        ];
+        let g2 = [lc2 * c2, lc2 * s2];
+        let m12 = cross(a, f_a) - cross(g2, [m2 * g[0], m2 * g[1]]);
+        dy[THETA3] = omega3;
+        dy[OMEGA3] = alpha3;
+        dy[X4] = v4;
+        dy[V4] = a4;
+        // The ideal mechanism at the same angle.
+        let (ideal_s, ideal_v, ideal_a, ideal_m12, ideal_pf) = if self.quadratures {
+            let id = self.ideal.at_sc(theta2, s2, c2, w, 0.0);
+            let ideal_s = id.pose.x4 - self.x4_tdc;
+            dy[Q_S] = s - ideal_s;
+            let dm = m12 - id.m12;
+            dy[Q_DM2] = dm * dm;
+            (ideal_s, id.pose.v4, id.pose.a4, id.m12, id.process_force)
+        } else {
+            dy[Q_S] = 0.0;
+            dy[Q_DM2] = 0.0;
+            (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
+        };
+        Outputs {
+            t,
+            theta2,
+            s,
+            v4,
+            a4,
+            alpha3,
+            f_n,
+            f_t,
+            m12,
+            delta,
+            delta_dot,
+            ecc,
+            process_force: f_proc,
+            ideal_s,
+            ideal_v,
+            ideal_a,
+            ideal_m12,
+            ideal_process_force: ideal_pf,
+        }
+    }
+
+    pub fn outputs(&self, t: f64, y: &[f64; DIM]) -> Outputs {
+        let mut dy = [0.0; DIM];
+        self.evaluate(t, y, &mut dy)
+    }
+
+    pub fn outputs_in(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Outputs {
+        let mut dy = [0.0; DIM];
+        self.evaluate_in(mode, t, y, &mut dy)
+    }
+}
+
+/// The model frozen in one contact mode (to rebuild a past step's dense
+/// output after the mode has changed).
+pub struct InMode<'a> {
+    pub model: &'a ClearanceModel,
+    pub mode: Mode,
+}
+
+impl System<DIM> for InMode<'_> {
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        self.model.evaluate_in(self.mode, t, y, dy);
+    }
+}
+
+impl System<DIM> for ClearanceModel {
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        self.evaluate(t, y, dy);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With the journal centred and moving with the ideal mechanism, the
+    /// initial state is the ideal one and nothing penetrates.
+    #[test]
+    fn initial_state_is_ideal() {
+        let p = Params::flores();
+        let m = ClearanceModel::new(&p);
+        let y = m.initial_state(0.0);
+        let o = m.outputs(0.0, &y);
+        assert!((o.delta + p.clearance).abs() < 1e-15);
+        assert!(o.s.abs() < 1e-15 && o.ideal_s.abs() < 1e-15);
+        assert!((o.v4 - o.ideal_v).abs() < 1e-12);
+        assert_eq!(o.f_n, 0.0);
+        let (d, dd) = m.penetration(0.0, &y);
+        assert!((d - o.delta).abs() < 1e-18 && dd.abs() < 1e-9);
+    }
+
+    /// In free flight the pin bar coasts under gravity (no guide friction
+    /// without a normal force from the joint), and the rod's angular
+    /// acceleration follows from the crank pin's motion alone.
+    #[test]
+    fn free_flight_dynamics() {
+        let mut p = Params::paper();
+        p.f_ins = crate::model::table::Table::zero();
+        let m = ClearanceModel::new(&p);
+        let y = m.initial_state(0.0);
+        let mut dy = [0.0; DIM];
+        let o = m.evaluate(0.001, &y, &mut dy);
+        assert_eq!(o.f_n, 0.0);
+        assert!((dy[V4] - 9.81).abs() < 1e-12, "a4 = {}", dy[V4]);
+        // Rod: (I3 + m3 Lc3²) α3 = m3 Lc3 u3 × (g − a_A).
+        let th2 = m.theta2(0.001);
+        let aa = [
+            -p.r * m.omega.powi(2) * th2.cos(),
+            -p.r * m.omega.powi(2) * th2.sin(),
+        ];
+        let u3 = [y[THETA3].cos(), y[THETA3].sin()];
+        let expect =
+            p.m3 * p.lc3 * cross(u3, [9.81 - aa[0], -aa[1]]) / (p.i3 + p.m3 * p.lc3 * p.lc3);
+        assert!((dy[OMEGA3] - expect).abs() < 1e-9 * expect.abs().max(1.0));
+    }
+
+    /// In contact, the contact force acts equal and opposite: the pin bar's
+    /// x force balance and the normal force agree.
+    #[test]
+    fn contact_force_balance() {
+        let mut p = Params::flores();
+        p.gravity = [0.0, 0.0];
+        let mut m = ClearanceModel::new(&p);
+        m.mode = Mode {
+            in_contact: true,
+            approach: 1.0,
+        };
+        let mut y = m.initial_state(0.0);
+        // Push the journal 1 µm into the wall along +x.
+        y[X4] += p.clearance + 1e-6;
+        let mut dy = [0.0; DIM];
+        let o = m.evaluate(0.0, &y, &mut dy);
+        let expect = m.law.k * 1e-6f64.powf(1.5) * (1.0 + m.law.d * o.delta_dot / 1.0);
+        assert!(
+            (o.f_n - expect).abs() < 1e-6 * expect,
+            "{} vs {}",
+            o.f_n,
+            expect
+        );
+        // Pushed along +x: the pin bar is pushed back (−x).
+        assert!((dy[V4] * p.m4 + o.f_n * o.ecc[0] / o.ecc[0].hypot(o.ecc[1])).abs() < 1e-6 * o.f_n);
+    }
+}
