@@ -1,0 +1,755 @@
+//! Calibration: what a log can identify, fitted against the model by least
+//! squares on quantities that are not chaotic.
+//!
+//! 1. Clearance, laser zero and phase — from the stroke. Over the measured
+//!    cycles, per crank angle: the mean stroke M(φ) and its spread across
+//!    cycles S(φ). The model's ensemble at clearance c gives the same two
+//!    curves (the spread grows with c: the journal rattles in the
+//!    clearance). Objective: Σ_φ (S − √(S_c² + σ_n²))²/var + Σ_φ (M + Δz −
+//!    M_c + ψ·M_c′)²/var, with the laser-zero correction Δz and a phase ψ
+//!    (the laser's lag as a crank angle) solved linearly for each c. The
+//!    model is run on a grid of clearances (in parallel) and interpolated
+//!    between them; c is found by golden-section search.
+//! 2. Standoff, F_ins table and the load cell's lag — from the force against
+//!    the (phase-corrected) measured stroke: the load cell reads
+//!    Lag_τ[F_ins(s − standoff)·c_d(v)] on the way down (and the fixed
+//!    F_wd on the way up). For a given (standoff, τ) the table values at the
+//!    nominal table's depths enter linearly (solved by least squares);
+//!    standoff and τ by golden-section searches.
+//! 3. Uncertainties: delete-one-block jackknife over blocks of measured
+//!    cycles (the whole fit repeated without each block) combined with a
+//!    jackknife over blocks of simulated revolutions (the prediction's own
+//!    sampling noise). Each estimate is reported with σ and the expanded
+//!    uncertainty U = 2σ (~95 %).
+//!
+//! The sensor zeros: the laser zero mark is refined here (Δz); the force
+//! tare and the angle offset come from the cycle analysis and are reported
+//! as they are.
+
+use super::compare::OverlayError;
+use super::predict::{noise_sigma, predict, velocity, PredictOptions, Prediction};
+use crate::model::table::Table;
+use crate::model::Params;
+use crate::progress::Progress;
+use crate::rig::cycles::{CycleSet, ValueSource};
+use crate::rig::RigLog;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::f64::consts::TAU;
+
+/// How to calibrate.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrateOptions {
+    pub predict: PredictOptions,
+    /// Clearances simulated (mm); the nominal one is added.
+    pub clearance_grid_mm: Vec<f64>,
+    /// Jackknife blocks (of measured cycles and of simulated revolutions).
+    pub blocks: usize,
+    /// Fit the F_ins table (else only standoff and lag with the nominal table).
+    pub fit_f_ins: bool,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions {
+            predict: PredictOptions {
+                revs: 48,
+                ..PredictOptions::default()
+            },
+            clearance_grid_mm: vec![0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0],
+            blocks: 8,
+            fit_f_ins: true,
+        }
+    }
+}
+
+/// One estimated quantity.
+#[derive(Debug, Clone, Serialize)]
+pub struct Estimate {
+    pub name: String,
+    pub unit: String,
+    /// The value before calibration (metadata / parameter file / default).
+    pub nominal: Option<f64>,
+    pub value: f64,
+    /// Standard uncertainty.
+    pub sigma: f64,
+    /// Expanded uncertainty (k = 2, ~95 %).
+    pub u95: f64,
+    pub method: String,
+}
+
+/// How well a parameter set explains the log.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Residuals {
+    /// RMS over φ of measured − predicted spread of the stroke across cycles (mm).
+    pub stroke_spread_rms_mm: f64,
+    /// RMS over φ of measured − predicted mean stroke (mm).
+    pub stroke_mean_rms_mm: f64,
+    /// RMS of measured − predicted force over the fitted samples (N).
+    pub force_rms_n: f64,
+}
+
+/// The result of a calibration.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationReport {
+    pub file: String,
+    pub motor_rpm: f64,
+    pub cycles: usize,
+    pub estimates: Vec<Estimate>,
+    /// Fitted F_ins table: (depth mm, force N, σ N).
+    pub f_ins_table: Vec<(f64, f64, f64)>,
+    pub before: Residuals,
+    pub after: Residuals,
+    /// Objective of the stroke fit against clearance (the profile searched).
+    pub clearance_profile: Vec<(f64, f64)>,
+    /// The calibrated model parameters.
+    pub params: Params,
+    /// The parameter file written (TOML that `simulate` and `overlay` read).
+    pub params_toml: String,
+    pub notes: Vec<String>,
+}
+
+/// Stroke curves of one prediction: mean, spread and the mean's derivative in φ.
+struct Curves {
+    mean: Vec<f64>,
+    spread: Vec<f64>,
+    dmean: Vec<f64>,
+    /// Variances of the mean and of the spread (sampling).
+    var_mean: Vec<f64>,
+    var_spread: Vec<f64>,
+}
+
+fn curves_of(rows: &[&[f64]], n: usize) -> Curves {
+    let mut mean = vec![f64::NAN; n];
+    let mut spread = vec![f64::NAN; n];
+    let mut var_mean = vec![f64::NAN; n];
+    let mut var_spread = vec![f64::NAN; n];
+    for j in 0..n {
+        let v: Vec<f64> = rows.iter().map(|r| r[j]).filter(|x| x.is_finite()).collect();
+        if v.len() < 2 {
+            continue;
+        }
+        let k = v.len() as f64;
+        let m = v.iter().sum::<f64>() / k;
+        let s2 = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1.0);
+        mean[j] = m;
+        spread[j] = s2.sqrt();
+        var_mean[j] = s2 / k;
+        var_spread[j] = s2 / (2.0 * (k - 1.0));
+    }
+    let dmean = (0..n)
+        .map(|j| (mean[(j + 1) % n] - mean[(j + n - 1) % n]) / (2.0 * TAU / n as f64))
+        .collect();
+    Curves {
+        mean,
+        spread,
+        dmean,
+        var_mean,
+        var_spread,
+    }
+}
+
+/// Linear interpolation of two curves' values.
+fn lerp(a: &[f64], b: &[f64], w: f64) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x + w * (y - x)).collect()
+}
+
+/// The stroke objective at predicted curves `p` for measured curves `m`;
+/// returns (objective, Δz, ψ, spread RMS residual, mean RMS residual).
+fn stroke_objective(m: &Curves, p: &Curves, noise: f64) -> (f64, f64, f64, f64, f64) {
+    let n = m.mean.len();
+    let floor = 1e-8; // (0.1 µm)²
+    // Spread part.
+    let mut js = 0.0;
+    let mut rs = Vec::new();
+    for j in 0..n {
+        let (sm, sp) = (m.spread[j], p.spread[j]);
+        if !sm.is_finite() || !sp.is_finite() {
+            continue;
+        }
+        let pred = (sp * sp + noise * noise).sqrt();
+        let v = m.var_spread[j] + p.var_spread[j] + floor;
+        js += (sm - pred).powi(2) / v;
+        rs.push(sm - pred);
+    }
+    // Mean part: r = M + Δz − P + ψ·P′, weighted; solve the 2×2 normal equations.
+    let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut pts = Vec::new();
+    for j in 0..n {
+        let (mm, pm, dp) = (m.mean[j], p.mean[j], p.dmean[j]);
+        if !mm.is_finite() || !pm.is_finite() || !dp.is_finite() {
+            continue;
+        }
+        let w = 1.0 / (m.var_mean[j] + p.var_mean[j] + floor);
+        let y = pm - mm; // = Δz + ψ·P′
+        a11 += w;
+        a12 += w * dp;
+        a22 += w * dp * dp;
+        b1 += w * y;
+        b2 += w * y * dp;
+        pts.push((w, y, dp));
+    }
+    let det = a11 * a22 - a12 * a12;
+    let (dz, psi) = if det.abs() > 1e-300 {
+        ((b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det)
+    } else {
+        (b1 / a11.max(1e-300), 0.0)
+    };
+    let mut jm = 0.0;
+    let mut rm = Vec::new();
+    for (w, y, dp) in pts {
+        let r = y - dz - psi * dp;
+        jm += w * r * r;
+        rm.push(r);
+    }
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
+    (js + jm, dz, psi, rms(&rs), rms(&rm))
+}
+
+/// Predicted curves at clearance c, interpolated in the grid of predictions.
+fn interp_curves(grid: &[(f64, Curves)], c: f64) -> Curves {
+    let i = grid.partition_point(|g| g.0 < c).clamp(1, grid.len() - 1);
+    let (c0, a) = (&grid[i - 1].0, &grid[i - 1].1);
+    let (c1, b) = (&grid[i].0, &grid[i].1);
+    let w = ((c - c0) / (c1 - c0)).clamp(0.0, 1.0);
+    Curves {
+        mean: lerp(&a.mean, &b.mean, w),
+        spread: lerp(&a.spread, &b.spread, w),
+        dmean: lerp(&a.dmean, &b.dmean, w),
+        var_mean: lerp(&a.var_mean, &b.var_mean, w),
+        var_spread: lerp(&a.var_spread, &b.var_spread, w),
+    }
+}
+
+fn golden(mut lo: f64, mut hi: f64, iters: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..iters {
+        if f1 < f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The clearance that minimises the stroke objective (grid, then golden section).
+fn fit_clearance(m: &Curves, grid: &[(f64, Curves)], noise: f64) -> (f64, f64, f64) {
+    let obj = |c: f64| stroke_objective(m, &interp_curves(grid, c), noise).0;
+    let k = (0..grid.len())
+        .min_by(|&a, &b| obj(grid[a].0).total_cmp(&obj(grid[b].0)))
+        .unwrap_or(0);
+    let lo = grid[k.saturating_sub(1)].0;
+    let hi = grid[(k + 1).min(grid.len() - 1)].0;
+    let c = golden(lo, hi, 40, obj);
+    let (_, dz, psi, _, _) = stroke_objective(m, &interp_curves(grid, c), noise);
+    (c, dz, psi)
+}
+
+/// Measured data of one cycle for the force fit.
+struct ForceCycle {
+    /// Stroke (mm, phase-corrected, laser zero corrected), force (N), velocity (m/s).
+    s: Vec<f64>,
+    f: Vec<f64>,
+    v: Vec<f64>,
+    dt: f64,
+}
+
+/// Grid points within this many degrees of bottom dead centre are left out of
+/// the force fit (the filter still runs through them): the load drops there
+/// within a fraction of a degree (c_d(v) as the pin bar stops), so on a
+/// 0.5° grid the exact drop time cannot be represented and a few points would
+/// dominate the residual.
+const BDC_EXCLUDE_DEG: f64 = 4.0;
+
+/// The force fit uses the downstroke only up to the first grid point where,
+/// in or near the part (depth > −0.5 mm), the pin bar slows below this speed
+/// (m/s). With a clearance the pin bar dwells near bottom dead centre while
+/// the journal crosses the clearance; the process law then switches on the
+/// sign of a velocity of ~1 mm/s (c_d), far below what a differentiated laser
+/// signal resolves (~0.02 m/s), so those samples cannot be modelled from the
+/// measurement and would dominate the residual.
+const FIT_MIN_SPEED: f64 = 0.1;
+
+/// The force objective for (standoff, τ): table values by linear least
+/// squares; returns (sum of squares, values, samples).
+fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_wd: &Table, standoff_mm: f64, tau: f64, v0: f64, v1: f64) -> (f64, Vec<f64>, usize) {
+    let k = knots_mm.len();
+    let cd = |v: f64| if v < v0 { 0.0 } else if v > v1 { 1.0 } else { (v - v0) / (v1 - v0) };
+    // Hat basis on the knots; beyond the last knot the last value holds.
+    let basis = |d: f64, out: &mut [f64]| {
+        out.iter_mut().for_each(|x| *x = 0.0);
+        if d <= 0.0 {
+            return;
+        }
+        if d >= knots_mm[k - 1] {
+            out[k - 1] = 1.0;
+            return;
+        }
+        let i = knots_mm.partition_point(|&x| x <= d).max(1);
+        let w = (d - knots_mm[i - 1]) / (knots_mm[i] - knots_mm[i - 1]);
+        out[i - 1] = 1.0 - w;
+        out[i] = w;
+    };
+    let mut ata = vec![0.0; k * k];
+    let mut atb = vec![0.0; k];
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    let mut ys: Vec<f64> = Vec::new();
+    let mut fixed_part: Vec<f64> = Vec::new();
+    let mut b = vec![0.0; k];
+    let mut prev = vec![0.0; k];
+    for c in cycles {
+        let (ea, b0, b1) = super::predict::ramp_lag_coefficients(c.dt, tau);
+        let n = c.s.len();
+        let excl = (BDC_EXCLUDE_DEG / 360.0 * n as f64).round() as usize;
+        let stop = (0..n / 2)
+            .find(|&j| c.s[j].is_finite() && c.s[j] - standoff_mm > -0.5 && c.v[j].is_finite() && c.v[j] < FIT_MIN_SPEED)
+            .unwrap_or(n / 2);
+        let mut state = vec![0.0; k];
+        let mut state_wd = 0.0;
+        let mut prev_wd = 0.0;
+        prev.iter_mut().for_each(|x| *x = 0.0);
+        for j in 0..n {
+            let (s, v) = (c.s[j], c.v[j]);
+            let d = if s.is_finite() { s - standoff_mm } else { f64::NAN };
+            let mut wd = 0.0;
+            if d.is_finite() && v.is_finite() {
+                if v > 0.0 {
+                    basis(d, &mut b);
+                    let g = cd(v);
+                    b.iter_mut().for_each(|x| *x *= g);
+                } else {
+                    b.iter_mut().for_each(|x| *x = 0.0);
+                    wd = -f_wd.eval(d * 1e-3) * cd(-v);
+                }
+            } else {
+                b.iter_mut().for_each(|x| *x = 0.0);
+            }
+            for i in 0..k {
+                state[i] = ea * state[i] + b0 * prev[i] + b1 * b[i];
+            }
+            state_wd = ea * state_wd + b0 * prev_wd + b1 * wd;
+            prev.copy_from_slice(&b);
+            prev_wd = wd;
+            let y = c.f[j];
+            // Samples that carry information: force expected or measured, away from BDC.
+            let near_bdc = j.abs_diff(n / 2) <= excl;
+            if j < stop && !near_bdc && y.is_finite() && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5) {
+                cols.push(state.clone());
+                ys.push(y);
+                fixed_part.push(state_wd);
+            }
+        }
+    }
+    let vals: Vec<f64> = match fixed {
+        Some(v) => v.to_vec(),
+        None => {
+            for ((r, &y), &fw) in cols.iter().zip(&ys).zip(&fixed_part) {
+                for i in 0..k {
+                    atb[i] += r[i] * (y - fw);
+                    for j in 0..k {
+                        ata[i * k + j] += r[i] * r[j];
+                    }
+                }
+            }
+            let m = nalgebra::DMatrix::from_row_slice(k, k, &ata) + nalgebra::DMatrix::identity(k, k) * 1e-9;
+            let rhs = nalgebra::DVector::from_vec(atb.clone());
+            match m.lu().solve(&rhs) {
+                Some(x) => x.iter().copied().collect(),
+                None => vec![0.0; k],
+            }
+        }
+    };
+    let mut ss = 0.0;
+    for ((r, &y), &fw) in cols.iter().zip(&ys).zip(&fixed_part) {
+        let pred: f64 = r.iter().zip(&vals).map(|(a, b)| a * b).sum::<f64>() + fw;
+        ss += (y - pred).powi(2);
+    }
+    (ss, vals, ys.len())
+}
+
+/// Standoff and τ minimising the force objective (nested golden sections).
+fn fit_force(cycles: &[&ForceCycle], knots: &[f64], fixed: Option<&[f64]>, p: &Params, around: (f64, f64), spans: (f64, f64), iters: usize) -> (f64, f64, Vec<f64>) {
+    let (s0, t0) = around;
+    let inner = |tau: f64| {
+        let so = golden(s0 - spans.0, s0 + spans.0, iters, |so| force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0);
+        (so, force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0)
+    };
+    let tau = golden((t0 - spans.1).max(0.0), t0 + spans.1, iters, |t| inner(t).1);
+    let (so, _) = inner(tau);
+    let (_, vals, _) = force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1);
+    (so, tau, vals)
+}
+
+/// Jackknife standard error of estimates from delete-one-block fits.
+fn jackknife(values: &[f64]) -> f64 {
+    let b = values.len();
+    if b < 2 {
+        return f64::NAN;
+    }
+    let m = values.iter().sum::<f64>() / b as f64;
+    ((b as f64 - 1.0) / b as f64 * values.iter().map(|x| (x - m).powi(2)).sum::<f64>()).sqrt()
+}
+
+/// Calibrates `base` (the nominal parameters) against a log.
+pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOptions, progress: &Progress) -> Result<CalibrationReport, OverlayError> {
+    let file = log.file.clone();
+    let n = cs.points_per_rev;
+    let mut notes = Vec::new();
+    let cycles: Vec<&crate::rig::Cycle> = cs.usable().filter(|c| !c.stroke_mm.is_empty()).collect();
+    if cycles.len() < 4 {
+        return Err(OverlayError::NoData {
+            file,
+            message: format!("calibration needs at least 4 usable cycles with a displacement signal, {} found", cycles.len()),
+        });
+    }
+    let gear = cs.crank.gear_ratio;
+    let motor_rpm = cycles.iter().map(|c| c.crank_rpm).sum::<f64>() / cycles.len() as f64 * gear;
+    let noise = log.signals.displacement.as_ref().map_or(0.0, |s| noise_sigma(&s.values));
+
+    // 1. Predictions on the clearance grid (in parallel).
+    let nominal_c = base.clearance * 1e3;
+    let mut grid_c: Vec<f64> = opts.clearance_grid_mm.clone();
+    grid_c.push(nominal_c);
+    grid_c.retain(|c| c.is_finite() && *c > 0.0);
+    grid_c.sort_by(|a, b| a.total_cmp(b));
+    grid_c.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let popts = PredictOptions {
+        points_per_rev: n,
+        ..opts.predict.clone()
+    };
+    progress.set_total(grid_c.len() as u64 + 2);
+    let preds: Vec<Result<Prediction, _>> = grid_c
+        .par_iter()
+        .map(|&c| {
+            let mut p = base.clone();
+            p.clearance = c * 1e-3;
+            let r = predict(&p, motor_rpm, &popts, &Progress::hidden());
+            progress.inc(1);
+            r
+        })
+        .collect();
+    let mut preds_ok = Vec::new();
+    for (c, r) in grid_c.iter().zip(preds) {
+        match r {
+            Ok(p) => preds_ok.push((*c, p)),
+            Err(e) => notes.push(format!("the model failed at clearance {c} mm ({e}); left out of the grid")),
+        }
+    }
+    if preds_ok.len() < 3 {
+        return Err(OverlayError::NoData {
+            file,
+            message: "the model ran at fewer than 3 clearances".into(),
+        });
+    }
+    let nb = opts.blocks.max(2);
+    let pred_curves = |drop: Option<usize>| -> Vec<(f64, Curves)> {
+        preds_ok
+            .iter()
+            .map(|(c, p)| {
+                let r = p.stroke_revs.len();
+                let rows: Vec<&[f64]> = p
+                    .stroke_revs
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| drop.is_none_or(|b| i * nb / r != b))
+                    .map(|(_, v)| v.as_slice())
+                    .collect();
+                (*c, curves_of(&rows, n))
+            })
+            .collect()
+    };
+    let meas_curves = |drop: Option<usize>| -> Curves {
+        let k = cycles.len();
+        let rows: Vec<&[f64]> = cycles
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| drop.is_none_or(|b| i * nb / k != b))
+            .map(|(_, c)| c.stroke_mm.as_slice())
+            .collect();
+        curves_of(&rows, n)
+    };
+    let full_pred = pred_curves(None);
+    let full_meas = meas_curves(None);
+    let (c_fit, dz, psi) = fit_clearance(&full_meas, &full_pred, noise);
+    let profile: Vec<(f64, f64)> = full_pred
+        .iter()
+        .map(|(c, cu)| (*c, stroke_objective(&full_meas, cu, noise).0))
+        .collect();
+    // Jackknife: blocks of measured cycles, blocks of simulated revolutions.
+    let jk_meas: Vec<(f64, f64, f64)> = (0..nb.min(cycles.len())).into_par_iter().map(|b| fit_clearance(&meas_curves(Some(b)), &full_pred, noise)).collect();
+    let jk_pred: Vec<(f64, f64, f64)> = (0..nb).into_par_iter().map(|b| fit_clearance(&full_meas, &pred_curves(Some(b)), noise)).collect();
+    let combine = |f: fn(&(f64, f64, f64)) -> f64| {
+        let a = jackknife(&jk_meas.iter().map(f).collect::<Vec<_>>());
+        let b = jackknife(&jk_pred.iter().map(f).collect::<Vec<_>>());
+        (a * a + b * b).sqrt()
+    };
+    let sc = combine(|x| x.0);
+    let sdz = combine(|x| x.1);
+    let spsi = combine(|x| x.2);
+    progress.inc(1);
+    let edge = grid_c.first().is_some_and(|&lo| c_fit <= lo * 1.001) || grid_c.last().is_some_and(|&hi| c_fit >= hi * 0.999);
+    if edge {
+        notes.push(format!("the clearance estimate {c_fit:.3} mm is at the edge of the simulated grid ({:.3}–{:.3} mm): treat it as a bound", grid_c[0], grid_c[grid_c.len() - 1]));
+    }
+    let before_curves = interp_curves(&full_pred, nominal_c);
+    let (_, _, _, b_spread, _) = stroke_objective(&full_meas, &before_curves, noise);
+    // Before: the cycle analysis's zeros (no Δz, no phase).
+    let b_mean = {
+        let r: Vec<f64> = full_meas.mean.iter().zip(&before_curves.mean).map(|(a, b)| a - b).filter(|x| x.is_finite()).collect();
+        (r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64).sqrt()
+    };
+    let (_, _, _, a_spread, a_mean) = stroke_objective(&full_meas, &interp_curves(&full_pred, c_fit), noise);
+
+    // 2. Force: standoff, F_ins, load-cell lag.
+    let omega_deg = |c: &crate::rig::Cycle| TAU * c.crank_rpm / 60.0;
+    let shift = psi; // laser phase (rad): measured stroke lags the true one by ψ
+    let fcycles: Vec<ForceCycle> = cycles
+        .iter()
+        .filter(|c| !c.force_n.is_empty())
+        .map(|c| {
+            // Advance the stroke by ψ (interpolated on the grid) and add Δz.
+            let k = shift / (TAU / n as f64);
+            let s: Vec<f64> = (0..n)
+                .map(|j| {
+                    let x = j as f64 + k;
+                    let i0 = x.floor();
+                    let w = x - i0;
+                    let a = c.stroke_mm[(i0 as i64).rem_euclid(n as i64) as usize];
+                    let b = c.stroke_mm[((i0 as i64) + 1).rem_euclid(n as i64) as usize];
+                    a + w * (b - a) + dz
+                })
+                .collect();
+            let v = velocity(&s, omega_deg(c));
+            ForceCycle {
+                s,
+                f: c.force_n.clone(),
+                v,
+                dt: c.duration_s / n as f64,
+            }
+        })
+        .collect();
+    let mut estimates = Vec::new();
+    let meta_or = |m: Option<f64>| m;
+    let nominal_so = base.standoff * 1e3;
+    let knots: Vec<f64> = {
+        let k: Vec<f64> = base.f_ins.to_mm().iter().map(|p| p.0).collect();
+        if k.len() >= 2 { k } else { vec![0.0, 0.2, 0.5, 1.0, 2.0] }
+    };
+    let mut fitted = base.clone();
+    fitted.clearance = c_fit * 1e-3;
+    let mut table_out = Vec::new();
+    let (mut before_force, mut after_force) = (f64::NAN, f64::NAN);
+    if fcycles.is_empty() {
+        notes.push("no force channel: standoff and F_ins cannot be identified; the nominal values are kept".into());
+    } else {
+        let all: Vec<&ForceCycle> = fcycles.iter().collect();
+        let nominal_vals: Vec<f64> = knots.iter().map(|&d| base.f_ins.eval(d * 1e-3)).collect();
+        let fixed = if opts.fit_f_ins { None } else { Some(nominal_vals.as_slice()) };
+        let (so, tau, vals) = fit_force(&all, &knots, fixed, base, (nominal_so, 200e-6), (2.0, 200e-6), 30);
+        let nb_f = nb.min(all.len());
+        let jk: Vec<(f64, f64, Vec<f64>)> = (0..nb_f)
+            .into_par_iter()
+            .map(|b| {
+                let sub: Vec<&ForceCycle> = all.iter().enumerate().filter(|(i, _)| i * nb_f / all.len() != b).map(|(_, c)| *c).collect();
+                fit_force(&sub, &knots, fixed, base, (so, tau), (0.3, 60e-6), 18)
+            })
+            .collect();
+        progress.inc(1);
+        let s_so = jackknife(&jk.iter().map(|x| x.0).collect::<Vec<_>>());
+        let s_tau = jackknife(&jk.iter().map(|x| x.1).collect::<Vec<_>>());
+        let (ss_b, _, nb_s) = force_fit(&all, &knots, Some(&nominal_vals), &base.f_wd, nominal_so, 0.0, base.v0, base.v1);
+        let (ss_a, _, na_s) = force_fit(&all, &knots, Some(&vals), &base.f_wd, so, tau, base.v0, base.v1);
+        before_force = (ss_b / nb_s.max(1) as f64).sqrt();
+        after_force = (ss_a / na_s.max(1) as f64).sqrt();
+        estimates.push(Estimate {
+            name: "standoff".into(),
+            unit: "mm".into(),
+            nominal: Some(nominal_so),
+            value: so,
+            sigma: s_so,
+            u95: 2.0 * s_so,
+            method: "force against the measured stroke: onset of F_ins(s − standoff), with the load cell's lag".into(),
+        });
+        estimates.push(Estimate {
+            name: "force_lag".into(),
+            unit: "us".into(),
+            nominal: None,
+            value: tau * 1e6,
+            sigma: s_tau * 1e6,
+            u95: 2.0 * s_tau * 1e6,
+            method: "first-order lag of the load cell fitted with the standoff".into(),
+        });
+        fitted.standoff = so * 1e-3;
+        if opts.fit_f_ins {
+            let pts: Vec<(f64, f64)> = knots.iter().zip(&vals).map(|(d, f)| (*d, f.max(0.0))).collect();
+            match Table::from_mm(&pts) {
+                Ok(t) => fitted.f_ins = t,
+                Err(e) => notes.push(format!("fitted F_ins table rejected ({e}); nominal kept")),
+            }
+            for (i, (&d, &f)) in knots.iter().zip(&vals).enumerate() {
+                let s = jackknife(&jk.iter().map(|x| x.2[i]).collect::<Vec<_>>());
+                table_out.push((d, f, s));
+            }
+        }
+    }
+
+    // 3. Estimates of the stroke fit.
+    let lz = &cs.offsets.laser_zero_mm;
+    estimates.insert(
+        0,
+        Estimate {
+            name: "clearance".into(),
+            unit: "mm".into(),
+            nominal: Some(nominal_c),
+            value: c_fit,
+            sigma: sc,
+            u95: 2.0 * sc,
+            method: "spread and mean of the stroke across cycles against the model's ensembles".into(),
+        },
+    );
+    estimates.insert(
+        1,
+        Estimate {
+            name: "laser_zero".into(),
+            unit: "mm".into(),
+            nominal: meta_or(log.meta.laser_zero_mm),
+            value: lz.applied + dz,
+            sigma: sdz,
+            u95: 2.0 * sdz,
+            method: format!(
+                "mean stroke against the model's mean stroke at the fitted clearance (the cycle analysis had {:.4} mm, {})",
+                lz.applied,
+                match lz.source {
+                    ValueSource::Metadata => "from the metadata",
+                    ValueSource::Override => "a session override",
+                    _ => "an ideal-mechanism estimate",
+                }
+            ),
+        },
+    );
+    let omega = TAU * motor_rpm / gear / 60.0;
+    estimates.insert(
+        2,
+        Estimate {
+            name: "laser_lag".into(),
+            unit: "us".into(),
+            nominal: None,
+            value: psi / omega * 1e6,
+            sigma: spsi / omega * 1e6,
+            u95: 2.0 * spsi / omega * 1e6,
+            method: "phase of the mean stroke against the model (the laser's lag; with an uncalibrated encoder it also holds the angle offset's error)".into(),
+        },
+    );
+    let o = &cs.offsets;
+    if let Some(e) = o.force_tare_n.estimate {
+        estimates.push(Estimate {
+            name: "force_tare".into(),
+            unit: "N".into(),
+            nominal: log.meta.force_tare_n,
+            value: e,
+            sigma: o.force_tare_n.sigma.unwrap_or(f64::NAN),
+            u95: 2.0 * o.force_tare_n.sigma.unwrap_or(f64::NAN),
+            method: "off-part load-cell reading (cycle analysis)".into(),
+        });
+    }
+    if let Some(e) = o.angle_offset_rad.estimate {
+        estimates.push(Estimate {
+            name: "angle_offset".into(),
+            unit: "rad".into(),
+            nominal: log.meta.angle_offset_rad,
+            value: e,
+            sigma: o.angle_offset_rad.sigma.unwrap_or(f64::NAN),
+            u95: 2.0 * o.angle_offset_rad.sigma.unwrap_or(f64::NAN),
+            method: o.angle_offset_rad.note.clone(),
+        });
+    }
+    progress.inc(1);
+
+    let mut toml = format!(
+        "# pinsight calibrate {file}\n# motor {motor_rpm:.1} rpm, {} cycles. Estimates (value ± U95):\n",
+        cycles.len()
+    );
+    for e in &estimates {
+        toml.push_str(&format!("#   {} = {:.5} ± {:.5} {}\n", e.name, e.value, e.u95, e.unit));
+    }
+    toml.push_str(&format!(
+        "# Sensor settings for `pinsight overlay`: --meta laser_zero_mm={:.4} --laser-lag-us {:.1}{}\n",
+        lz.applied + dz,
+        psi / omega * 1e6,
+        estimates.iter().find(|e| e.name == "force_lag").map_or(String::new(), |e| format!(" --force-lag-us {:.1}", e.value))
+    ));
+    toml.push_str(&fitted.to_toml());
+    Ok(CalibrationReport {
+        file,
+        motor_rpm,
+        cycles: cycles.len(),
+        estimates,
+        f_ins_table: table_out,
+        before: Residuals {
+            stroke_spread_rms_mm: b_spread,
+            stroke_mean_rms_mm: b_mean,
+            force_rms_n: before_force,
+        },
+        after: Residuals {
+            stroke_spread_rms_mm: a_spread,
+            stroke_mean_rms_mm: a_mean,
+            force_rms_n: after_force,
+        },
+        clearance_profile: profile,
+        params: fitted,
+        params_toml: toml,
+        notes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn golden_and_jackknife() {
+        let x = golden(0.0, 4.0, 60, |x| (x - 1.3).powi(2));
+        assert!((x - 1.3).abs() < 1e-9);
+        // Jackknife of the mean of n blocks = the standard error of the mean.
+        let v = [1.0, 2.0, 3.0, 4.0];
+        let means: Vec<f64> = (0..4).map(|i| v.iter().enumerate().filter(|(j, _)| *j != i).map(|x| x.1).sum::<f64>() / 3.0).collect();
+        let se = (v.iter().map(|x| (x - 2.5f64).powi(2)).sum::<f64>() / 3.0 / 4.0).sqrt();
+        assert!((jackknife(&means) - se).abs() < 1e-12);
+    }
+
+    #[test]
+    fn force_fit_recovers_a_table_and_standoff() {
+        // A synthetic cycle: stroke ramps through the part, force = F_ins(s − 14) lagged.
+        let p = Params::paper();
+        let n = 720;
+        let dt = 0.05 / n as f64;
+        let s: Vec<f64> = (0..n).map(|j| 8.0 - 8.0 * (j as f64 * TAU / n as f64).cos()).collect();
+        let v = velocity(&s, TAU * 20.0);
+        let tau = 150e-6;
+        let mut f: Vec<f64> = (0..n)
+            .map(|j| {
+                let d = s[j] - 13.8;
+                if v[j] > 0.0 && d > 0.0 { p.f_ins.eval(d * 1e-3) } else { 0.0 }
+            })
+            .collect();
+        super::super::predict::lag_filter(&mut f, dt, tau);
+        let c = ForceCycle { s, f, v, dt };
+        let knots = [0.0, 0.2, 0.5, 2.0];
+        let (so, t, vals) = fit_force(&[&c], &knots, None, &p, (14.0, 200e-6), (1.0, 200e-6), 50);
+        assert!((so - 13.8).abs() < 0.01, "{so}");
+        assert!((t - tau).abs() < 10e-6, "{t}");
+        assert!((vals[2] - 21.0).abs() < 0.5 && (vals[3] - 23.0).abs() < 0.5, "{vals:?}");
+    }
+}

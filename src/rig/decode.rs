@@ -1,0 +1,835 @@
+//! Message decoding: which channel carries what ([`Plans`]) and the visitor
+//! that turns JSON messages into samples ([`Decoder`]).
+//!
+//! Scalar messages carry one sample per message in a JSON field. Block
+//! messages (`{"t0_ns", "dt_ns", "values": [...]}`, field name in the
+//! schema's `title`) carry many; sample i is at `t0_ns + i·dt_ns`. Whether a
+//! channel holds blocks is decided from its JSON schema (properties
+//! `t0_ns`/`dt_ns`/`values`), or per message when there is no schema. A
+//! block is never read as a scalar (it has no scalar field: it is counted
+//! as a wrong-shape message if its channel's schema says scalar), and a block
+//! whose schema title names another field than the map's is rejected, not
+//! guessed.
+//!
+//! Invalid samples (`NaN`, `null`, `±Infinity`, a string...) are kept in
+//! the stream as NaN so that time-stream checks (duplicates, gaps) see the
+//! message, and counted by kind; they are removed from the final arrays.
+
+use super::channel_map::{ChannelMap, SignalKind, SignalSource};
+use super::json::{self, Num, Val};
+use super::mcap_read::{ChannelDef, RecordVisitor, SchemaDef};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// How messages of a channel are laid out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shape {
+    Scalar,
+    Block,
+    /// No usable schema: decided per message.
+    Auto,
+}
+
+/// One signal read from a channel.
+#[derive(Debug, Clone)]
+pub struct SignalPlan {
+    pub kind: SignalKind,
+    pub src: SignalSource,
+}
+
+/// What to do with a channel's messages.
+#[derive(Debug, Clone)]
+pub enum ChannelPlan {
+    Signals {
+        shape: Shape,
+        /// Schema title (block topics name their field there).
+        title: Option<String>,
+        signals: Vec<SignalPlan>,
+        /// Index of the first signal's buffer among all signal buffers (see [`Plans::slots`]).
+        base: usize,
+    },
+    /// Camera images (foxglove.CompressedImage in JSON); `full` keeps the decoded bytes.
+    Image { full: bool },
+    /// Mapped, but in an encoding pinsight cannot decode.
+    Undecodable,
+    /// Not used: messages are only counted.
+    Ignore,
+}
+
+/// Plans for all known channels, indexed by channel id (a vector, not a
+/// map: one lookup per message), with one buffer slot per decoded signal.
+#[derive(Debug, Clone, Default)]
+pub struct Plans {
+    plans: Vec<Option<ChannelPlan>>,
+    /// Per signal slot: (channel id, signal plan).
+    slots: Vec<(u16, SignalPlan)>,
+}
+
+/// Facts read from a JSON schema.
+#[derive(Debug, Clone, Default)]
+pub struct SchemaFacts {
+    pub title: Option<String>,
+    pub properties: Vec<String>,
+}
+
+impl SchemaFacts {
+    pub fn from_schema(s: &SchemaDef) -> Option<Self> {
+        if s.encoding != "jsonschema" {
+            return None;
+        }
+        let v: serde_json::Value = serde_json::from_slice(&s.data).ok()?;
+        let title = v.get("title").and_then(|t| t.as_str()).map(str::to_string);
+        let properties = v
+            .get("properties")
+            .and_then(|p| p.as_object())
+            .map(|o| o.keys().cloned().collect())
+            .unwrap_or_default();
+        Some(SchemaFacts { title, properties })
+    }
+
+    pub fn is_block(&self) -> bool {
+        let has = |k: &str| self.properties.iter().any(|p| p == k);
+        has("values") && (has("t0_ns") || has("dt_ns"))
+    }
+}
+
+impl Plans {
+    /// Builds the plan of one channel.
+    pub fn plan_for(
+        ch: &ChannelDef,
+        schemas: &BTreeMap<u16, SchemaDef>,
+        map: &ChannelMap,
+        full_images: bool,
+    ) -> ChannelPlan {
+        let schema = schemas.get(&ch.schema_id);
+        let sigs = map.signals_on(&ch.topic);
+        let is_image_topic = map.images.as_deref() == Some(ch.topic.as_str());
+        if sigs.is_empty() && !is_image_topic {
+            return ChannelPlan::Ignore;
+        }
+        if ch.message_encoding != "json" {
+            return ChannelPlan::Undecodable;
+        }
+        if sigs.is_empty() {
+            return ChannelPlan::Image { full: full_images };
+        }
+        let facts = schema.and_then(SchemaFacts::from_schema);
+        let shape = match &facts {
+            Some(f) if f.is_block() => Shape::Block,
+            Some(f) if !f.properties.is_empty() => Shape::Scalar,
+            _ => Shape::Auto,
+        };
+        ChannelPlan::Signals {
+            shape,
+            title: facts.and_then(|f| f.title),
+            signals: sigs
+                .into_iter()
+                .map(|(kind, src)| SignalPlan {
+                    kind,
+                    src: src.clone(),
+                })
+                .collect(),
+            base: 0,
+        }
+    }
+
+    pub fn build(
+        channels: &BTreeMap<u16, ChannelDef>,
+        schemas: &BTreeMap<u16, SchemaDef>,
+        map: &ChannelMap,
+        full_images: bool,
+    ) -> Self {
+        let mut p = Plans::default();
+        for c in channels.values() {
+            p.insert(c.id, Self::plan_for(c, schemas, map, full_images));
+        }
+        p
+    }
+
+    /// Sets the plan of a channel (signal slots are assigned here).
+    pub fn insert(&mut self, id: u16, mut plan: ChannelPlan) {
+        let i = id as usize;
+        if self.plans.len() <= i {
+            self.plans.resize(i + 1, None);
+        }
+        if let ChannelPlan::Signals { signals, base, .. } = &mut plan {
+            *base = self.slots.len();
+            for s in signals.iter() {
+                self.slots.push((id, s.clone()));
+            }
+        }
+        self.plans[i] = Some(plan);
+    }
+
+    #[inline]
+    pub fn get(&self, id: u16) -> Option<&ChannelPlan> {
+        self.plans.get(id as usize).and_then(Option::as_ref)
+    }
+
+    pub fn contains(&self, id: u16) -> bool {
+        self.get(id).is_some()
+    }
+
+    /// One past the largest channel id with a plan.
+    pub fn channel_bound(&self) -> usize {
+        self.plans.len()
+    }
+
+    /// The signal slots: (channel id, signal plan) per buffer index.
+    pub fn slots(&self) -> &[(u16, SignalPlan)] {
+        &self.slots
+    }
+}
+
+/// Maximum sample times remembered per kind of problem (for messages).
+pub const KEEP_TIMES: usize = 50;
+
+/// Counts of samples that are not usable numbers.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct InvalidCounts {
+    /// Written as the token `NaN`.
+    pub nan_token: u64,
+    /// Written as `null`.
+    pub null: u64,
+    /// ±Infinity, or a number beyond f64.
+    pub non_finite: u64,
+    /// Not a number (string, bool, object).
+    pub not_number: u64,
+}
+
+impl InvalidCounts {
+    pub fn total(&self) -> u64 {
+        self.nan_token + self.null + self.non_finite + self.not_number
+    }
+
+    pub fn add(&mut self, o: &InvalidCounts) {
+        self.nan_token += o.nan_token;
+        self.null += o.null;
+        self.non_finite += o.non_finite;
+        self.not_number += o.not_number;
+    }
+}
+
+/// Samples and counters of one signal from one work item (or merged).
+#[derive(Debug, Clone, Default)]
+pub struct SigBuf {
+    /// log_time (ns) and value per sample, in file order; NaN marks an invalid sample.
+    pub t: Vec<i64>,
+    pub v: Vec<f64>,
+    pub messages: u64,
+    pub blocks: u64,
+    pub invalid: InvalidCounts,
+    /// Times of the first invalid samples: (time, kind).
+    pub invalid_times: Vec<(i64, &'static str)>,
+    pub missing_field: u64,
+    pub missing_field_first: Option<i64>,
+    pub wrong_shape: u64,
+    pub wrong_shape_first: Option<(i64, String)>,
+    pub malformed: u64,
+    pub malformed_first: Option<(i64, String)>,
+    pub block_time_mismatch: u64,
+    pub block_time_mismatch_first: Option<(i64, i64)>,
+    pub time_out_of_range: u64,
+}
+
+impl SigBuf {
+    pub fn append(&mut self, o: &mut SigBuf) {
+        self.t.append(&mut o.t);
+        self.v.append(&mut o.v);
+        self.messages += o.messages;
+        self.blocks += o.blocks;
+        self.invalid.add(&o.invalid);
+        let room = KEEP_TIMES.saturating_sub(self.invalid_times.len());
+        self.invalid_times
+            .extend(o.invalid_times.iter().take(room).copied());
+        self.missing_field += o.missing_field;
+        self.missing_field_first = self.missing_field_first.or(o.missing_field_first);
+        self.wrong_shape += o.wrong_shape;
+        if self.wrong_shape_first.is_none() {
+            self.wrong_shape_first = o.wrong_shape_first.take();
+        }
+        self.malformed += o.malformed;
+        if self.malformed_first.is_none() {
+            self.malformed_first = o.malformed_first.take();
+        }
+        self.block_time_mismatch += o.block_time_mismatch;
+        self.block_time_mismatch_first = self
+            .block_time_mismatch_first
+            .or(o.block_time_mismatch_first);
+        self.time_out_of_range += o.time_out_of_range;
+    }
+
+    fn invalid(&mut self, t: i64, n: Num) {
+        let kind = match n {
+            Num::NanToken => {
+                self.invalid.nan_token += 1;
+                "NaN"
+            }
+            Num::Null => {
+                self.invalid.null += 1;
+                "null"
+            }
+            Num::NonFinite => {
+                self.invalid.non_finite += 1;
+                "±Infinity"
+            }
+            _ => {
+                self.invalid.not_number += 1;
+                "not a number"
+            }
+        };
+        if self.invalid_times.len() < KEEP_TIMES {
+            self.invalid_times.push((t, kind));
+        }
+        self.t.push(t);
+        self.v.push(f64::NAN);
+    }
+
+    #[inline]
+    fn push(&mut self, t: i64, n: Num, src: &SignalSource) {
+        match n {
+            Num::Finite(x) => {
+                let v = src.convert(x);
+                if v.is_finite() {
+                    self.t.push(t);
+                    self.v.push(v);
+                } else {
+                    self.invalid(t, Num::NonFinite);
+                }
+            }
+            other => self.invalid(t, other),
+        }
+    }
+}
+
+/// Per-channel message counters (all channels, used or not).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ChanCount {
+    pub messages: u64,
+    pub first: u64,
+    pub last: u64,
+}
+
+impl ChanCount {
+    fn add_time(&mut self, t: u64) {
+        if self.messages == 0 {
+            self.first = t;
+            self.last = t;
+        } else {
+            self.first = self.first.min(t);
+            self.last = self.last.max(t);
+        }
+        self.messages += 1;
+    }
+
+    pub fn merge(&mut self, o: &ChanCount) {
+        if o.messages == 0 {
+            return;
+        }
+        if self.messages == 0 {
+            *self = *o;
+        } else {
+            self.first = self.first.min(o.first);
+            self.last = self.last.max(o.last);
+            self.messages += o.messages;
+        }
+    }
+}
+
+/// One image message as found (bytes decoded only in `full` mode).
+#[derive(Debug, Clone)]
+pub struct ImageEntry {
+    pub channel: u16,
+    pub log_time: u64,
+    /// File offset of the chunk (or message record) holding it.
+    pub item_offset: u64,
+    pub frame_id: String,
+    pub format: String,
+    /// `timestamp` of the message (sec, nsec) as ns.
+    pub stamp_ns: Option<u64>,
+    /// Decoded size (exact in full mode, estimated from base64 otherwise).
+    pub data_len: u64,
+    pub data: Option<Vec<u8>>,
+    pub error: Option<String>,
+}
+
+/// The visitor: decodes the messages of one work item.
+pub struct Decoder {
+    pub plans: Arc<Plans>,
+    pub out: DecodeOut,
+    /// Message counters indexed by channel id.
+    pub counts: Vec<ChanCount>,
+    pub new_schemas: Vec<SchemaDef>,
+    pub new_channels: Vec<ChannelDef>,
+    /// Messages on channels the plans do not know (yet): (channel, log_time, payload).
+    pub deferred: Vec<(u16, u64, Vec<u8>)>,
+}
+
+/// A learned message layout of one channel (see [`json::Layout`]).
+#[derive(Debug, Clone)]
+struct LayoutEntry {
+    /// The channel's first signal slot (identifies the channel).
+    base: usize,
+    layout: json::Layout,
+    /// For each signal of the plan, the position of its value in the layout.
+    field_pos: Vec<Option<usize>>,
+}
+
+/// What a [`Decoder`] produced.
+#[derive(Debug, Default)]
+pub struct DecodeOut {
+    /// Signal buffers, one per slot of the plans ([`Plans::slots`]).
+    pub sigs: Vec<SigBuf>,
+    layouts: Vec<LayoutEntry>,
+    pub images: Vec<ImageEntry>,
+    pub item_offset: u64,
+}
+
+impl Decoder {
+    pub fn new(plans: Arc<Plans>, item_offset: u64) -> Self {
+        Decoder {
+            out: DecodeOut {
+                item_offset,
+                sigs: vec![SigBuf::default(); plans.slots.len()],
+                ..Default::default()
+            },
+            counts: vec![ChanCount::default(); plans.channel_bound()],
+            plans,
+            new_schemas: Vec::new(),
+            new_channels: Vec::new(),
+            deferred: Vec::new(),
+        }
+    }
+}
+
+impl DecodeOut {
+    #[inline]
+    fn sig(&mut self, base: usize, i: usize) -> &mut SigBuf {
+        &mut self.sigs[base + i]
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn decode_signals(
+        &mut self,
+        base: usize,
+        log_time: u64,
+        data: &[u8],
+        shape: Shape,
+        title: Option<&str>,
+        signals: &[SignalPlan],
+    ) {
+        let t = match i64::try_from(log_time) {
+            Ok(t) => t,
+            Err(_) => {
+                for i in 0..signals.len() {
+                    self.sig(base, i).time_out_of_range += 1;
+                }
+                return;
+            }
+        };
+        // Fast path: the channel's learned layout (numbers only).
+        if shape != Shape::Block {
+            if let Some(e) = self.layouts.iter().find(|e| e.base == base) {
+                let mut vals: [&[u8]; 8] = [&[]; 8];
+                if e.layout.matches(data, &mut vals) {
+                    for (i, s) in signals.iter().enumerate() {
+                        let b = &mut self.sigs[base + i];
+                        b.messages += 1;
+                        match e.field_pos.get(i).copied().flatten() {
+                            Some(k) => b.push(t, Val::Num(vals[k]).num(), &s.src),
+                            None => {
+                                b.missing_field += 1;
+                                b.missing_field_first.get_or_insert(t);
+                            }
+                        }
+                    }
+                    return;
+                }
+            }
+        }
+        // One pass over the object: the mapped fields and the block fields.
+        let mut found: [Option<Val>; 5] = [None; 5];
+        let mut t0 = None;
+        let mut dt = None;
+        let mut values = None;
+        let res = json::for_each_member(data, |k, v| {
+            let mut hit = false;
+            for (i, s) in signals.iter().enumerate().take(5) {
+                if json::key_is(k, &s.src.field) {
+                    found[i] = Some(v);
+                    hit = true;
+                }
+            }
+            // Block keys: 5 or 6 bytes long (a cheap filter before comparing).
+            if !hit && (k.len() == 5 || k.len() == 6 || k.contains(&b'\\')) {
+                if json::key_is(k, "t0_ns") {
+                    t0 = Some(v);
+                } else if json::key_is(k, "dt_ns") {
+                    dt = Some(v);
+                } else if json::key_is(k, "values") {
+                    values = Some(v);
+                }
+            }
+        });
+        if let Err(e) = res {
+            for i in 0..signals.len() {
+                let b = self.sig(base, i);
+                b.messages += 1;
+                b.malformed += 1;
+                if b.malformed_first.is_none() {
+                    b.malformed_first = Some((t, e.to_string()));
+                }
+            }
+            return;
+        }
+        let looks_block = values.is_some() && (t0.is_some() || dt.is_some());
+        if !looks_block && shape != Shape::Block && !self.layouts.iter().any(|e| e.base == base) {
+            if let Some((layout, keys)) = json::Layout::learn(data).filter(|(l, _)| l.values() <= 8)
+            {
+                // The last occurrence of a key wins, as in the scan above.
+                let field_pos = signals
+                    .iter()
+                    .map(|s| keys.iter().rposition(|k| json::key_is(k, &s.src.field)))
+                    .collect();
+                self.layouts.push(LayoutEntry {
+                    base,
+                    layout,
+                    field_pos,
+                });
+            }
+        }
+        let is_block = match shape {
+            Shape::Block => true,
+            Shape::Scalar => false,
+            Shape::Auto => looks_block && found.iter().all(Option::is_none),
+        };
+        for (i, s) in signals.iter().enumerate() {
+            let src = &s.src;
+            let b = &mut self.sigs[base + i];
+            b.messages += 1;
+            if is_block {
+                // A block topic names its field in the schema title.
+                if let Some(title) = title {
+                    if title != src.field {
+                        b.wrong_shape += 1;
+                        if b.wrong_shape_first.is_none() {
+                            b.wrong_shape_first = Some((
+                                t,
+                                format!(
+                                    "block schema title is '{title}', the map expects field '{}'",
+                                    src.field
+                                ),
+                            ));
+                        }
+                        continue;
+                    }
+                }
+                let (Some(t0v), Some(dtv), Some(Val::Array(arr))) = (t0, dt, values) else {
+                    b.wrong_shape += 1;
+                    if b.wrong_shape_first.is_none() {
+                        b.wrong_shape_first = Some((
+                            t,
+                            "block message without t0_ns, dt_ns and a values array".into(),
+                        ));
+                    }
+                    continue;
+                };
+                let (Some(t0n), Some(dtn)) = (t0v.u64(), dtv.u64()) else {
+                    b.wrong_shape += 1;
+                    if b.wrong_shape_first.is_none() {
+                        b.wrong_shape_first =
+                            Some((t, "block t0_ns / dt_ns are not unsigned integers".into()));
+                    }
+                    continue;
+                };
+                let (Ok(t0i), Ok(dti)) = (i64::try_from(t0n), i64::try_from(dtn)) else {
+                    b.time_out_of_range += 1;
+                    continue;
+                };
+                b.blocks += 1;
+                if t0n != log_time {
+                    b.block_time_mismatch += 1;
+                    if b.block_time_mismatch_first.is_none() {
+                        b.block_time_mismatch_first = Some((t, t0i));
+                    }
+                }
+                let mut k: i64 = 0;
+                let r = json::for_each_element(arr, |v| {
+                    let ts = t0i.saturating_add(dti.saturating_mul(k));
+                    b.push(ts, v.num(), src);
+                    k += 1;
+                });
+                if let Err(e) = r {
+                    b.malformed += 1;
+                    if b.malformed_first.is_none() {
+                        b.malformed_first = Some((t, format!("values array: {e}")));
+                    }
+                }
+            } else {
+                match found.get(i).copied().flatten() {
+                    Some(v) => b.push(t, v.num(), src),
+                    None if looks_block => {
+                        b.wrong_shape += 1;
+                        if b.wrong_shape_first.is_none() {
+                            b.wrong_shape_first = Some((
+                                t,
+                                "a block message (t0_ns, dt_ns, values) on a channel whose schema says one sample per message; not read as a scalar".into(),
+                            ));
+                        }
+                    }
+                    None => {
+                        b.missing_field += 1;
+                        b.missing_field_first.get_or_insert(t);
+                    }
+                }
+            }
+        }
+    }
+
+    fn decode_image(&mut self, ch: u16, log_time: u64, data: &[u8], full: bool) {
+        let mut e = ImageEntry {
+            channel: ch,
+            log_time,
+            item_offset: self.item_offset,
+            frame_id: String::new(),
+            format: String::new(),
+            stamp_ns: None,
+            data_len: 0,
+            data: None,
+            error: None,
+        };
+        let mut raw_data: Option<&[u8]> = None;
+        let mut stamp: Option<Val> = None;
+        let res = json::for_each_member(data, |k, v| {
+            if json::key_is(k, "frame_id") {
+                e.frame_id = v.string().unwrap_or_default();
+            } else if json::key_is(k, "format") {
+                e.format = v.string().unwrap_or_default();
+            } else if json::key_is(k, "data") {
+                if let Val::Str(s) = v {
+                    raw_data = Some(s);
+                }
+            } else if json::key_is(k, "timestamp") {
+                stamp = Some(v);
+            }
+        });
+        if let Err(err) = res {
+            e.error = Some(format!("message is not valid JSON: {err}"));
+            self.images.push(e);
+            return;
+        }
+        if let Some(Val::Object(o)) = stamp {
+            let (mut sec, mut nsec) = (None, None);
+            let _ = json::for_each_member(o, |k, v| {
+                if json::key_is(k, "sec") {
+                    sec = v.u64();
+                } else if json::key_is(k, "nsec") {
+                    nsec = v.u64();
+                }
+            });
+            if let (Some(s), Some(n)) = (sec, nsec) {
+                e.stamp_ns = s.checked_mul(1_000_000_000).and_then(|x| x.checked_add(n));
+            }
+        }
+        match raw_data {
+            None => e.error = Some("no base64 `data` string".into()),
+            Some(raw) => {
+                e.data_len = (raw.len() as u64 / 4) * 3;
+                if full {
+                    use base64::Engine;
+                    let decoded = if raw.contains(&b'\\') {
+                        json::unescape(raw)
+                            .ok_or_else(|| "bad string escape".to_string())
+                            .and_then(|s| {
+                                base64::engine::general_purpose::STANDARD
+                                    .decode(s.as_bytes())
+                                    .map_err(|x| x.to_string())
+                            })
+                    } else {
+                        base64::engine::general_purpose::STANDARD
+                            .decode(raw)
+                            .map_err(|x| x.to_string())
+                    };
+                    match decoded {
+                        Ok(bytes) => {
+                            e.data_len = bytes.len() as u64;
+                            e.data = Some(bytes);
+                        }
+                        Err(x) => e.error = Some(format!("`data` is not valid base64: {x}")),
+                    }
+                }
+            }
+        }
+        self.images.push(e);
+    }
+}
+
+impl RecordVisitor for Decoder {
+    fn schema(&mut self, def: SchemaDef) {
+        self.new_schemas.push(def);
+    }
+
+    fn channel(&mut self, def: ChannelDef) {
+        self.new_channels.push(def);
+    }
+
+    fn message(&mut self, channel_id: u16, log_time: u64, data: &[u8]) {
+        let Some(plan) = self.plans.get(channel_id) else {
+            self.deferred.push((channel_id, log_time, data.to_vec()));
+            return;
+        };
+        if let Some(c) = self.counts.get_mut(channel_id as usize) {
+            c.add_time(log_time);
+        }
+        match plan {
+            ChannelPlan::Signals {
+                shape,
+                title,
+                signals,
+                base,
+            } => {
+                self.out
+                    .decode_signals(*base, log_time, data, *shape, title.as_deref(), signals);
+            }
+            ChannelPlan::Image { full } => self.out.decode_image(channel_id, log_time, data, *full),
+            _ => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plans_for(shape: Shape, title: Option<&str>, kinds: &[(SignalKind, &str)]) -> Plans {
+        let mut p = Plans::default();
+        p.insert(
+            1,
+            ChannelPlan::Signals {
+                base: 0,
+                shape,
+                title: title.map(str::to_string),
+                signals: kinds
+                    .iter()
+                    .map(|(k, f)| SignalPlan {
+                        kind: *k,
+                        src: SignalSource {
+                            topic: "/t".into(),
+                            field: f.to_string(),
+                            unit: k.unit().into(),
+                            scale: 2.0,
+                            offset: 1.0,
+                            unit_factor: 1.0,
+                        },
+                    })
+                    .collect(),
+            },
+        );
+        p
+    }
+
+    #[test]
+    fn scalar_messages_and_invalid_tokens() {
+        let p = plans_for(
+            Shape::Scalar,
+            None,
+            &[
+                (SignalKind::Angle, "angle_rad"),
+                (SignalKind::Speed, "speed_rpm"),
+            ],
+        );
+        let mut d = Decoder::new(Arc::new(p), 0);
+        d.message(1, 10, br#"{"angle_rad": 1.0, "speed_rpm": NaN}"#);
+        d.message(1, 20, br#"{"angle_rad": null, "speed_rpm": 3}"#);
+        d.message(1, 30, br#"{"speed_rpm": 3"#);
+        d.message(1, 40, br#"{"t0_ns": 40, "dt_ns": 1, "values": [1,2]}"#);
+        let a = &d.out.sigs[0];
+        assert_eq!((a.t[0], a.v[0]), (10, 3.0));
+        assert!(a.v[1].is_nan());
+        assert_eq!(a.invalid.null, 1);
+        assert_eq!(a.malformed, 1);
+        assert_eq!(
+            a.wrong_shape, 1,
+            "a block on a scalar channel is never read as a scalar"
+        );
+        let s = &d.out.sigs[1];
+        assert_eq!(s.invalid.nan_token, 1);
+        assert_eq!((s.t[1], s.v[1]), (20, 7.0));
+        assert_eq!(d.counts[1].messages, 4);
+    }
+
+    #[test]
+    fn block_messages_expand_and_check_title() {
+        let p = plans_for(
+            Shape::Block,
+            Some("force_n"),
+            &[(SignalKind::Force, "force_n")],
+        );
+        let mut d = Decoder::new(Arc::new(p), 0);
+        d.message(
+            1,
+            1000,
+            br#"{"t0_ns": 1000, "dt_ns": 100, "values": [0.5, NaN, 1.5]}"#,
+        );
+        d.message(1, 5000, br#"{"t0_ns": 4000, "dt_ns": 100, "values": [2]}"#);
+        let f = &d.out.sigs[0];
+        assert_eq!(f.t.len(), 4);
+        assert_eq!((f.t[0], f.v[0]), (1000, 2.0));
+        assert_eq!((f.t[2], f.v[2]), (1200, 4.0));
+        assert_eq!(f.t[3], 4000);
+        assert_eq!(f.invalid.nan_token, 1);
+        assert_eq!(f.blocks, 2);
+        assert_eq!(f.block_time_mismatch, 1);
+        let p2 = plans_for(
+            Shape::Block,
+            Some("displacement_mm"),
+            &[(SignalKind::Force, "force_n")],
+        );
+        let mut d2 = Decoder::new(Arc::new(p2), 0);
+        d2.message(
+            1,
+            1000,
+            br#"{"t0_ns": 1000, "dt_ns": 100, "values": [0.5]}"#,
+        );
+        assert_eq!(d2.out.sigs[0].wrong_shape, 1);
+        assert!(d2.out.sigs[0].t.is_empty());
+    }
+
+    #[test]
+    fn auto_shape_detects_blocks_and_defers_unknown_channels() {
+        let p = plans_for(Shape::Auto, None, &[(SignalKind::Force, "force_n")]);
+        let mut d = Decoder::new(Arc::new(p), 0);
+        d.message(
+            1,
+            1000,
+            br#"{"t0_ns": 1000, "dt_ns": 100, "values": [0.5, 1]}"#,
+        );
+        d.message(1, 2000, br#"{"force_n": 1}"#);
+        d.message(9, 3000, br#"{"x": 1}"#);
+        assert_eq!(d.out.sigs[0].t.len(), 3);
+        assert_eq!(d.deferred.len(), 1);
+    }
+
+    #[test]
+    fn images_decode_base64() {
+        let mut p = Plans::default();
+        p.insert(2, ChannelPlan::Image { full: true });
+        let mut d = Decoder::new(Arc::new(p), 77);
+        d.message(
+            2,
+            5,
+            br#"{"timestamp": {"sec": 1, "nsec": 2}, "frame_id": "cycle-3", "format": "png", "data": "aGVsbG8="}"#,
+        );
+        let e = &d.out.images[0];
+        assert_eq!(e.data.as_deref(), Some(&b"hello"[..]));
+        assert_eq!(
+            (
+                e.frame_id.as_str(),
+                e.format.as_str(),
+                e.stamp_ns,
+                e.item_offset
+            ),
+            ("cycle-3", "png", Some(1_000_000_002), 77)
+        );
+    }
+}
