@@ -123,6 +123,45 @@ pub struct BarChart {
     pub errors: Option<Vec<Vec<f64>>>,
 }
 
+/// A compact tick label: up to three significant digits, scientific
+/// notation outside 1e-3 … 1e5 (so log axes read `1e-5`, not
+/// `9.999999999e-6`).
+pub fn tick_label(v: f64) -> String {
+    if !v.is_finite() {
+        return String::new();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        let exp = a.log10().floor();
+        let mut mant = v / 10f64.powf(exp);
+        let mut exp = exp as i32;
+        if (mant.abs() - 10.0).abs() < 1e-6 {
+            mant /= 10.0;
+            exp += 1;
+        }
+        let m = format!("{mant:.2}");
+        let m = m.trim_end_matches('0').trim_end_matches('.');
+        if m == "1" {
+            format!("1e{exp}")
+        } else if m == "-1" {
+            format!("-1e{exp}")
+        } else {
+            format!("{m}e{exp}")
+        }
+    } else {
+        let digits = (2 - a.log10().floor() as i32).max(0) as usize;
+        let t = format!("{v:.digits$}");
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    }
+}
+
 /// Colour palette, chosen to stay distinct on white and in grey print.
 pub fn palette(i: usize) -> RGBColor {
     const P: [RGBColor; 10] = [
@@ -211,6 +250,10 @@ macro_rules! draw_line_chart_body {
         let mut mesh = c.configure_mesh();
         mesh.x_desc(chart.x_label.as_str())
             .y_desc(chart.y_label.as_str())
+            .x_label_formatter(&|v: &f64| tick_label(*v))
+            .y_label_formatter(&|v: &f64| tick_label(*v))
+            .x_labels(8)
+            .y_labels(8)
             .label_style((FONT_NAME, 13))
             .axis_desc_style((FONT_NAME, 14))
             .light_line_style(RGBColor(235, 235, 235));
@@ -596,6 +639,19 @@ mod tests {
         assert!(non_white > 10_000, "only {non_white} drawn pixels");
         let png = render_png(&[], 1, 100, 50).unwrap();
         assert_eq!(&png[1..4], b"PNG");
+    }
+
+    #[test]
+    fn tick_labels_are_compact() {
+        assert_eq!(tick_label(9.999_999_999_999e-6), "1e-5");
+        assert_eq!(tick_label(2.5e-7), "2.5e-7");
+        assert_eq!(tick_label(0.0001), "1e-4");
+        assert_eq!(tick_label(123.456), "123");
+        assert_eq!(tick_label(1.5), "1.5");
+        assert_eq!(tick_label(0.0123), "0.0123");
+        assert_eq!(tick_label(-2.0e6), "-2e6");
+        assert_eq!(tick_label(0.0), "0");
+        assert_eq!(tick_label(16.0), "16");
     }
 
     #[test]

@@ -1,13 +1,352 @@
-//! `pinsight methods` (not yet implemented).
+//! `pinsight methods [dynamics|vision]`: the methods lab.
 
+use crate::methods::Effort;
+use crate::methods::dynamics::{DynamicsLab, run_dynamics_lab, scenes_from_toml};
+use crate::plot::write_png;
+use crate::progress::{Progress, ProgressBarGuard};
+use anyhow::{Context, anyhow, bail};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Inputs.
-    pub inputs: Vec<String>,
+    /// Which lab: dynamics or vision.
+    #[arg(default_value = "dynamics")]
+    pub lab: String,
+    /// A TOML file of scenes ([[scene]] with name, preset, set = ["k=v", …]) for the dynamics lab.
+    #[arg(long, value_name = "FILE")]
+    pub scenes: Option<PathBuf>,
+    /// Full study (minutes) instead of the quick one (seconds).
+    #[arg(long)]
+    pub full: bool,
+    /// Output directory for the tables (JSON, CSV) and charts (PNG).
+    #[arg(long, default_value = "pinsight-methods")]
+    pub out: PathBuf,
+    /// Print the JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("`methods` is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let effort = if args.full {
+        Effort::Full
+    } else {
+        Effort::Quick
+    };
+    match args.lab.as_str() {
+        "dynamics" => run_dynamics(&args, effort),
+        "vision" => bail!("the vision lab is not wired in yet"),
+        other => Err(anyhow!("unknown lab `{other}` (allowed: dynamics, vision)")),
+    }
+}
+
+fn run_dynamics(args: &Args, effort: Effort) -> anyhow::Result<ExitCode> {
+    let custom = match &args.scenes {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            Some(
+                scenes_from_toml(&text)
+                    .map_err(|e| anyhow!("scenes file {}: {e}", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let progress = Progress::new(1);
+    let lab = {
+        let _bar = ProgressBarGuard::start(progress.clone(), "methods");
+        run_dynamics_lab(effort, custom, &progress)
+    };
+    let json = serde_json::to_string_pretty(&lab)?;
+    let path = args.out.join("dynamics.json");
+    std::fs::write(&path, &json).with_context(|| format!("writing {}", path.display()))?;
+    write_tables(&args.out, &lab)?;
+    write_png(
+        &args.out.join("work_precision.png"),
+        &lab.work_precision_panels(),
+        2,
+        1500,
+        1200,
+    )?;
+    write_png(
+        &args.out.join("stability.png"),
+        &lab.stability_panels(),
+        1,
+        1100,
+        750,
+    )?;
+    write_png(
+        &args.out.join("long_run.png"),
+        &lab.long_run_panels(),
+        2,
+        1500,
+        600,
+    )?;
+    write_png(
+        &args.out.join("step_budget.png"),
+        &lab.budget_panels(),
+        1,
+        1400,
+        600,
+    )?;
+    if args.json {
+        println!("{json}");
+    } else {
+        print_summary(&mut std::io::stdout().lock(), &lab, &args.out)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn csv_f(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        String::new()
+    }
+}
+
+fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
+    let mut w = String::from(
+        "scene,method,setting_kind,setting,wall_ms,rhs_evals,aux_evals,steps,rejected,impacts,impact_count_error,stroke_err_mm,event_time_err_s,peak_force_rel_err,failed\n",
+    );
+    for p in &lab.work_precision {
+        w.push_str(&format!(
+            "\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},\"{}\"\n",
+            p.scene,
+            p.method,
+            p.setting_kind,
+            p.setting,
+            csv_f(p.wall_ms),
+            p.rhs_evals,
+            p.aux_evals,
+            p.steps,
+            p.rejected,
+            p.impacts,
+            p.impact_count_error,
+            csv_f(p.stroke_err_mm),
+            csv_f(p.event_time_err_s),
+            csv_f(p.peak_force_rel_err),
+            p.failed.as_deref().unwrap_or("").replace('"', "'")
+        ));
+    }
+    std::fs::write(dir.join("work_precision.csv"), w)?;
+    let mut w = String::from(
+        "variant,method,omega_contact,predicted_stable_step_s,measured_stable_step_s,measured_accurate_step_s,failure_beyond\n",
+    );
+    for r in &lab.stability {
+        w.push_str(&format!(
+            "\"{}\",{},{},{},{},{},{}\n",
+            r.variant,
+            r.method,
+            r.omega_contact,
+            r.predicted_stable_step_s,
+            r.measured_stable_step_s.map(csv_f).unwrap_or_default(),
+            r.measured_accurate_step_s.map(csv_f).unwrap_or_default(),
+            r.failure_beyond
+                .map(|o| format!("{o:?}"))
+                .unwrap_or_default()
+        ));
+    }
+    std::fs::write(dir.join("stability.csv"), w)?;
+    let mut w =
+        String::from("scene,solver,rtol,rhs_evals,wall_ms,error,error_kind,impacts,failed\n");
+    for p in &lab.outside_reference {
+        w.push_str(&format!(
+            "\"{}\",\"{}\",{},{},{},{},\"{}\",{},\"{}\"\n",
+            p.scene,
+            p.solver,
+            p.rtol,
+            p.rhs_evals,
+            csv_f(p.wall_ms),
+            csv_f(p.error),
+            p.error_kind,
+            p.impacts.map(|i| i.to_string()).unwrap_or_default(),
+            p.failed.as_deref().unwrap_or("").replace('"', "'")
+        ));
+    }
+    std::fs::write(dir.join("outside_reference.csv"), w)?;
+    let mut w = String::from(
+        "rtol,horizon_revs,tolerance_horizon_revs,wall_ms,rhs_evals,as_good_as_tightest",
+    );
+    for f in DynamicsLab::long_run_figures() {
+        w.push_str(&format!(",{f}_mean,{f}_std"));
+    }
+    w.push('\n');
+    for r in &lab.long_run.rows {
+        w.push_str(&format!(
+            "{},{},{},{},{},{}",
+            r.rtol,
+            r.horizon_revs.map(csv_f).unwrap_or_default(),
+            r.tolerance_horizon_revs.map(csv_f).unwrap_or_default(),
+            r.wall_ms,
+            r.rhs_evals,
+            r.as_good_as_tightest
+        ));
+        for (_, m, s) in &r.figures {
+            w.push_str(&format!(",{},{}", csv_f(*m), csv_f(*s)));
+        }
+        w.push('\n');
+    }
+    std::fs::write(dir.join("long_run.csv"), w)?;
+    let mut w = String::from("clearance_mm,motor_rpm,chosen,stroke_diff_mm,force_diff_n,reason\n");
+    for c in &lab.fidelity {
+        w.push_str(&format!(
+            "{},{},{},{},{},\"{}\"\n",
+            c.clearance_mm,
+            c.motor_rpm,
+            c.chosen.name(),
+            c.stroke_diff_mm.map(csv_f).unwrap_or_default(),
+            c.force_diff_n.map(csv_f).unwrap_or_default(),
+            c.reason.replace('"', "'")
+        ));
+    }
+    std::fs::write(dir.join("fidelity.csv"), w)?;
+    Ok(())
+}
+
+fn print_summary<W: Write>(out: &mut W, lab: &DynamicsLab, dir: &Path) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "pinsight methods dynamics ({:?}) — {:.1} s",
+        lab.effort,
+        lab.wall_ms / 1e3
+    )?;
+    writeln!(
+        out,
+        "work–precision (deterministic window, reference dop853 rtol 1e-13):"
+    )?;
+    writeln!(
+        out,
+        "  {:<36} {:<7} {:>9} {:>8} {:>8} {:>11} {:>11} {:>10}",
+        "scene", "method", "setting", "evals", "wall ms", "stroke err", "event err", "impacts±"
+    )?;
+    for p in &lab.work_precision {
+        match &p.failed {
+            None => writeln!(
+                out,
+                "  {:<36} {:<7} {:>9.0e} {:>8} {:>8.2} {:>11.2e} {:>11.2e} {:>10}",
+                p.scene,
+                p.method,
+                p.setting,
+                p.rhs_evals + p.aux_evals,
+                p.wall_ms,
+                p.stroke_err_mm,
+                p.event_time_err_s,
+                p.impact_count_error
+            )?,
+            Some(e) => writeln!(
+                out,
+                "  {:<36} {:<7} {:>9.0e} failed: {e}",
+                p.scene, p.method, p.setting
+            )?,
+        }
+    }
+    writeln!(
+        out,
+        "imaginary-axis stability limits h·ω: {:?}",
+        lab.imaginary_axis_limits
+    )?;
+    writeln!(
+        out,
+        "fixed-step limits (predicted = limit / contact frequency):"
+    )?;
+    for r in &lab.stability {
+        writeln!(
+            out,
+            "  {:<26} {:<7} ω {:>9.3e} rad/s  predicted {:>9.3e} s  stable {:>10}  accurate {:>10}  beyond: {}",
+            r.variant,
+            r.method,
+            r.omega_contact,
+            r.predicted_stable_step_s,
+            r.measured_stable_step_s
+                .map(|h| format!("{h:.3e}"))
+                .unwrap_or("–".into()),
+            r.measured_accurate_step_s
+                .map(|h| format!("{h:.3e}"))
+                .unwrap_or("–".into()),
+            r.failure_beyond
+                .map(|o| format!("{o:?}"))
+                .unwrap_or("–".into())
+        )?;
+    }
+    writeln!(
+        out,
+        "long run ({}, {} realisations × {} revolutions):",
+        lab.long_run.scene, lab.long_run.realisations, lab.long_run.revs
+    )?;
+    for r in &lab.long_run.rows {
+        let f = r
+            .figures
+            .first()
+            .map(|f| format!("mean |Δs| {:.5} ± {:.5} mm", f.1, f.2))
+            .unwrap_or_default();
+        writeln!(
+            out,
+            "  rtol {:.0e}: horizon {} revs (vs tightest tolerance: {}), {f}, {} evals, {}",
+            r.rtol,
+            r.horizon_revs
+                .map(|h| format!("{h:.2}"))
+                .unwrap_or("–".into()),
+            r.tolerance_horizon_revs
+                .map(|h| format!("{h:.2}"))
+                .unwrap_or("> span".into()),
+            r.rhs_evals,
+            if r.as_good_as_tightest {
+                "as good as the tightest"
+            } else {
+                "differs from the tightest"
+            }
+        )?;
+    }
+    if let Some(t) = lab.long_run.recommended_rtol {
+        writeln!(
+            out,
+            "  → cheapest tolerance with the tightest's statistics: {t:.0e}"
+        )?;
+    }
+    writeln!(
+        out,
+        "outside reference (ode_solvers 0.6.2, same right-hand side):"
+    )?;
+    for p in &lab.outside_reference {
+        match &p.failed {
+            None => writeln!(
+                out,
+                "  {:<20} {:<40} rtol {:>7.0e} evals {:>7} error {:>10.3e}{}",
+                p.scene,
+                p.solver,
+                p.rtol,
+                p.rhs_evals,
+                p.error,
+                p.impacts
+                    .map(|i| format!(" impacts {i}"))
+                    .unwrap_or_default()
+            )?,
+            Some(e) => writeln!(
+                out,
+                "  {:<20} {:<40} rtol {:>7.0e} failed: {e}",
+                p.scene, p.solver, p.rtol
+            )?,
+        }
+    }
+    writeln!(out, "failure modes:")?;
+    for f in &lab.failures {
+        writeln!(out, "  {} ({}): {}", f.what, f.method, f.outcome)?;
+    }
+    writeln!(out, "fidelity (paper preset, alloy steel):")?;
+    for c in &lab.fidelity {
+        writeln!(
+            out,
+            "  c {} mm, {} rpm → {}: {}",
+            c.clearance_mm,
+            c.motor_rpm,
+            c.chosen.name(),
+            c.reason
+        )?;
+    }
+    writeln!(out, "tables and charts in {}", dir.display())?;
+    Ok(())
 }

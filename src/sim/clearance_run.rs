@@ -14,7 +14,7 @@
 //!    around every discrete local maximum that may beat the record).
 
 use super::summary::{
-    NQ, PeakTracker, Q_ACC, Q_DS, Q_DV, Q_FN, Q_M12, Q_PROC, Q_SMAX, Q_SMIN, quantities,
+    NQ, PeakTracker, Q_ACC, Q_DS, Q_DV, Q_FN, Q_M12, Q_PEN, Q_PROC, Q_SMAX, Q_SMIN, quantities,
 };
 use super::{ContactEvent, Curves, SimError, SimOptions, SimResult, Summary, wrap_deg};
 use crate::model::clearance::{ClearanceModel, DIM, InMode, Mode, Q_DM2, Q_S, V4, X4};
@@ -403,6 +403,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
     }
     progress.set_total(1000);
     let mut iter: u64 = 0;
+    let (mut contact_steps, mut free_steps) = (0u64, 0u64);
     while t < t_end {
         iter += 1;
         if iter % 512 == 0 {
@@ -432,10 +433,23 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             return Err(r.fail(e));
         }
         let (t0, t1) = (r.st.t_prev(), r.st.t());
+        if in_contact {
+            contact_steps += 1;
+        } else {
+            free_steps += 1;
+        }
         let y1 = *r.st.y();
         let pen1 = r.model.penetration(t1, &y1);
         let (d0, dd0) = pen;
         let (d1, dd1) = pen1;
+        if !(d1 < r.model.rb) {
+            // Deeper than the journal itself (or NaN): not physics any more.
+            return Err(SimError::BlowUp {
+                t: t1,
+                crank_deg: wrap_deg(r.model.theta2(t1)),
+                penetration_um: d1 * 1e6,
+            });
+        }
         // Look for this mode's event: onset (δ up through 0) in free
         // flight, loss (δ down through 0) in contact.
         // crossing = (ta, g(ta), tb, g(tb)) bracketing the event.
@@ -648,6 +662,9 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         ideal_peak_accel_mps2: ideal.summary.peak_accel_mps2,
         ideal_peak_torque_nm: ideal.summary.peak_torque_nm,
         double_crossings_caught: r.double_crossings,
+        peak_penetration_um: best[Q_PEN].max(0.0) * 1e6,
+        contact_steps,
+        free_steps,
     };
     Ok(SimResult {
         summary,

@@ -1,6 +1,6 @@
 //! Levels `kinematic` and `ideal`: closed form at every crank angle.
 
-use super::summary::{NQ, PeakTracker, Q_ACC, Q_FN, Q_M12, Q_PROC, Q_SMAX, Q_SMIN, quantities};
+use super::summary::{PeakTracker, Q_ACC, Q_FN, Q_M12, Q_PROC, Q_SMAX, Q_SMIN, quantities};
 use super::{Curves, SimOptions, SimResult, Summary};
 use crate::model::clearance::Outputs;
 use crate::model::kinematics::Geometry;
@@ -93,7 +93,6 @@ pub fn run(p: &Params, opts: &SimOptions) -> SimResult {
         }
         c
     });
-    let _ = NQ;
     let summary = Summary {
         preset: p.preset.clone(),
         motor_rpm: p.motor_rpm,
@@ -129,6 +128,9 @@ pub fn run(p: &Params, opts: &SimOptions) -> SimResult {
         ideal_peak_accel_mps2: best[Q_ACC],
         ideal_peak_torque_nm: forces.then_some(best[Q_M12]),
         double_crossings_caught: 0,
+        peak_penetration_um: 0.0,
+        contact_steps: 0,
+        free_steps: 0,
     };
     let mut notes = Vec::new();
     if opts.level == super::Level::Ideal {

@@ -225,6 +225,14 @@ pub enum SimError {
         mode: &'static str,
     },
     #[error(
+        "blow-up at t = {t:.9} s (crank angle {crank_deg:.3}°): penetration {penetration_um:.4e} µm exceeds the journal radius — the step is beyond the method's stability limit for this contact stiffness"
+    )]
+    BlowUp {
+        t: f64,
+        crank_deg: f64,
+        penetration_um: f64,
+    },
+    #[error(
         "too many contact events ({0}) — the contact chatters; loosen event tolerance or check parameters"
     )]
     EventStorm(u64),

@@ -51,13 +51,18 @@ pub struct Summary {
     /// The ideal mechanism's peaks over the same window, for comparison.
     pub ideal_peak_accel_mps2: f64,
     pub ideal_peak_torque_nm: Option<f64>,
+    /// Largest penetration δ of the journal into the bearing, µm (continuous-time peak).
+    pub peak_penetration_um: f64,
+    /// Accepted steps taken in contact and in free flight (where the work goes).
+    pub contact_steps: u64,
+    pub free_steps: u64,
     /// Free-flight steps whose double crossing of the clearance boundary
     /// was caught by the guard.
     pub double_crossings_caught: u64,
 }
 
 /// Quantities whose continuous-time maxima are tracked.
-pub(crate) const NQ: usize = 8;
+pub(crate) const NQ: usize = 9;
 pub(crate) const Q_ACC: usize = 0;
 pub(crate) const Q_FN: usize = 1;
 pub(crate) const Q_M12: usize = 2;
@@ -66,6 +71,7 @@ pub(crate) const Q_DV: usize = 4;
 pub(crate) const Q_SMIN: usize = 5;
 pub(crate) const Q_SMAX: usize = 6;
 pub(crate) const Q_PROC: usize = 7;
+pub(crate) const Q_PEN: usize = 8;
 
 /// The tracked quantities of an output (all maximised; the stroke minimum
 /// as the maximum of −s).
@@ -80,6 +86,7 @@ pub(crate) fn quantities(o: &Outputs) -> [f64; NQ] {
         -o.s,
         o.s,
         -o.process_force,
+        o.delta,
     ]
 }
 
