@@ -24,7 +24,7 @@
 //! study = { clearances_mm = [0.1, 0.5], speeds_rpm = [1200], materials = ["alloy_steel"], warmup = 1, revs = 1 }
 //!
 //! [[step]]
-//! kind = "run"                       # model | study
+//! kind = "run"                       # model | study | methods
 //! what = "model"
 //!
 //! [[step]]
@@ -550,11 +550,21 @@ impl Runner {
                     ok(index, "run", "study", d)
                 }
             }
+            "methods" => {
+                let start = std::time::Instant::now();
+                self.session.run_methods_now();
+                ok(
+                    index,
+                    "run",
+                    "methods",
+                    format!("quick methods lab, {:.1} s", start.elapsed().as_secs_f64()),
+                )
+            }
             other => err(
                 index,
                 "run",
                 other,
-                format!("cannot run `{other}` (allowed: model, study)"),
+                format!("cannot run `{other}` (allowed: model, study, methods)"),
             ),
         }
     }

@@ -89,6 +89,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     if !args.no_run {
         session.run_model_now();
+        if pane == PaneId::Methods {
+            session.run_methods_now();
+        }
         if pane == PaneId::Study {
             let progress = crate::progress::Progress::new(session.study_setup.grid.len() as u64);
             let _bar = crate::progress::ProgressBarGuard::start(progress.clone(), "study");

@@ -58,6 +58,11 @@ pub struct ChartView {
     pub y_ticks: Vec<String>,
     pub series: Vec<SeriesView>,
     pub markers: Vec<VMarker>,
+    /// The x / y values are log10 of the data (ticks show powers of ten).
+    #[serde(default)]
+    pub log_x: bool,
+    #[serde(default)]
+    pub log_y: bool,
 }
 
 impl ChartView {
@@ -86,7 +91,29 @@ impl ChartView {
             y_ticks: ticks(yb),
             series,
             markers: Vec::new(),
+            log_x: false,
+            log_y: false,
         }
+    }
+
+    /// Marks the axes as log10 and relabels their ticks as powers of ten.
+    fn with_log(mut self, log_x: bool, log_y: bool) -> Self {
+        self.log_x = log_x;
+        self.log_y = log_y;
+        let pow = |b: [f64; 2]| -> Vec<String> {
+            let mid = 0.5 * (b[0] + b[1]);
+            [b[0], mid, b[1]]
+                .iter()
+                .map(|v| format!("1e{:.1}", v).replace(".0", ""))
+                .collect()
+        };
+        if log_x {
+            self.x_ticks = pow(self.x_bounds);
+        }
+        if log_y {
+            self.y_ticks = pow(self.y_bounds);
+        }
+        self
     }
 
     /// Whether any series has a finite point.
@@ -98,16 +125,22 @@ impl ChartView {
 
     /// The chart as a [`crate::plot`] panel (for PNG export).
     pub fn to_panel(&self) -> Panel {
+        let unlog = |v: f64, log: bool| if log { 10f64.powf(v) } else { v };
         let series = self
             .series
             .iter()
             .map(|s| {
+                let points = s
+                    .points
+                    .iter()
+                    .map(|p| (unlog(p.0, self.log_x), unlog(p.1, self.log_y)))
+                    .collect();
                 let style = match s.kind {
                     SeriesKind::Line => SeriesStyle::Line,
                     SeriesKind::Reference => SeriesStyle::Dashed,
                     SeriesKind::Points => SeriesStyle::Points,
                 };
-                Series::line(s.name.clone(), s.points.clone())
+                Series::line(s.name.clone(), points)
                     .with_style(style)
                     .with_color(s.color)
             })
@@ -117,8 +150,16 @@ impl ChartView {
             x_label: self.x_label.clone(),
             y_label: self.y_label.clone(),
             series,
-            x_range: Some((self.x_bounds[0], self.x_bounds[1])),
-            y_range: Some((self.y_bounds[0], self.y_bounds[1])),
+            x_range: Some((
+                unlog(self.x_bounds[0], self.log_x),
+                unlog(self.x_bounds[1], self.log_x),
+            )),
+            y_range: Some((
+                unlog(self.y_bounds[0], self.log_y),
+                unlog(self.y_bounds[1], self.log_y),
+            )),
+            log_x: self.log_x,
+            log_y: self.log_y,
             ..Default::default()
         })
     }
@@ -127,8 +168,39 @@ impl ChartView {
 impl ChartView {
     /// A [`crate::plot::LineChart`] decimated to `cols` columns.
     pub fn from_line_chart(c: &LineChart, cols: usize) -> Self {
-        let xb = c.x_range.map(|(a, b)| [a, b]).unwrap_or_else(|| {
-            finite_bounds(c.series.iter().flat_map(|s| s.points.iter().map(|p| p.0)))
+        // Log axes: the chart is drawn over log10 of the values (non-positive
+        // values become gaps).
+        let tx = |v: f64| {
+            if c.log_x {
+                if v > 0.0 { v.log10() } else { f64::NAN }
+            } else {
+                v
+            }
+        };
+        let ty = |v: f64| {
+            if c.log_y {
+                if v > 0.0 { v.log10() } else { f64::NAN }
+            } else {
+                v
+            }
+        };
+        let series_pts: Vec<Vec<(f64, f64)>> = c
+            .series
+            .iter()
+            .map(|s| {
+                let mut pts: Vec<(f64, f64)> =
+                    s.points.iter().map(|p| (tx(p.0), ty(p.1))).collect();
+                // Points may come in any x order (work–precision curves):
+                // sort each run so decimation can bisect it.
+                if s.style == SeriesStyle::Points {
+                    pts.retain(|p| p.0.is_finite() && p.1.is_finite());
+                    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                }
+                pts
+            })
+            .collect();
+        let xb = c.x_range.map(|(a, b)| [tx(a), tx(b)]).unwrap_or_else(|| {
+            finite_bounds(series_pts.iter().flat_map(|s| s.iter().map(|p| p.0)))
         });
         let series = c
             .series
@@ -142,7 +214,17 @@ impl ChartView {
                     SeriesStyle::Points => SeriesKind::Points,
                     _ => SeriesKind::Line,
                 },
-                points: decimate_points(&s.points, xb[0], xb[1], cols),
+                points: {
+                    let pts = &series_pts[i];
+                    let ascending = runs(pts).all(|r| r.windows(2).all(|w| w[0].0 <= w[1].0));
+                    if ascending {
+                        decimate_points(pts, xb[0], xb[1], cols)
+                    } else {
+                        // A curve that turns back in x (a work–precision
+                        // curve): few points, kept as they are.
+                        pts.clone()
+                    }
+                },
             })
             .collect();
         Self::new(
@@ -152,6 +234,7 @@ impl ChartView {
             series,
             Some(xb),
         )
+        .with_log(c.log_x, c.log_y)
     }
 }
 

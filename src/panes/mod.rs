@@ -154,7 +154,7 @@ impl PaneState {
             "study" => self.study.set(k, value),
             "vision" => self.vision.set(k, value),
             "yield" => self.yields.set(k, value),
-            "methods" => Err(format!("no option `{k}`")),
+            "methods" => self.methods.set(k, value),
             _ => Err("an option is named pane.key".to_string()),
         };
         res.map_err(|e| {
@@ -181,6 +181,7 @@ pub const UI_OPTIONS: &[&str] = &[
     "study.quantity",
     "vision.image",
     "vision.pin",
+    "methods.chart",
 ];
 
 pub(crate) fn parse_f64(v: &str) -> Result<f64, String> {
@@ -197,7 +198,9 @@ pub(crate) fn parse_usize(v: &str) -> Result<usize, String> {
         .map_err(|_| format!("`{v}` is not a non-negative integer"))
 }
 
-/// A pane's view, whichever pane it is.
+/// A pane's view, whichever pane it is. (One is built per frame; boxing
+/// the larger variants would buy nothing.)
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]
 pub enum PaneView {

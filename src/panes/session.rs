@@ -225,6 +225,9 @@ pub struct Session {
     /// How the session is displayed (set by the front end: colours, image
     /// protocol), shown on the Session pane.
     pub display: Option<String>,
+    /// The methods lab (quick effort), once run.
+    pub methods: Option<crate::methods::dynamics::DynamicsLab>,
+    pub methods_error: Option<String>,
 }
 
 impl Default for Session {
@@ -251,6 +254,8 @@ impl Session {
             recipes: Vec::new(),
             images: Vec::new(),
             display: None,
+            methods: None,
+            methods_error: None,
         }
     }
 
@@ -331,6 +336,12 @@ impl Session {
     pub fn run_model_now(&mut self) {
         let r = run_model(&self.params, self.level, &Progress::hidden());
         self.set_model_run(r);
+    }
+
+    /// Runs the quick methods lab now.
+    pub fn run_methods_now(&mut self) {
+        self.methods = Some(run_methods(&Progress::hidden()));
+        self.methods_error = None;
     }
 
     /// Runs the study now.
@@ -735,6 +746,12 @@ pub fn run_study(params: &Params, setup: &StudySetup, progress: &Progress) -> Sw
     };
     progress.set_message(format!("study: {} cases", setup.grid.len()));
     run_sweep(params, &setup.grid, &opts, progress)
+}
+
+/// Runs the quick methods lab (seconds): work–precision, stability, long
+/// run, step budgets, fidelity map.
+pub fn run_methods(progress: &Progress) -> crate::methods::dynamics::DynamicsLab {
+    crate::methods::dynamics::run_dynamics_lab(crate::methods::Effort::Quick, None, progress)
 }
 
 #[cfg(test)]

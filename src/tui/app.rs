@@ -246,7 +246,21 @@ impl App {
                     self.start_model();
                 }
             }
-            JobOutput::Failed(e) => self.message = Some((e, true)),
+            JobOutput::Methods(lab) => {
+                if job.progress.is_cancelled() {
+                    self.message = Some(("methods lab cancelled".into(), true));
+                } else {
+                    self.session.methods = Some(*lab);
+                    self.session.methods_error = None;
+                    self.message = Some(("methods lab done".into(), false));
+                }
+            }
+            JobOutput::Failed(e) => {
+                if job.kind == JobKind::Methods {
+                    self.session.methods_error = Some(e.clone());
+                }
+                self.message = Some((e, true))
+            }
         }
     }
 
@@ -300,6 +314,14 @@ impl App {
     fn switch(&mut self, p: PaneId) {
         self.pane = p;
         self.message = None;
+        // The quick methods lab runs the first time its pane is shown.
+        if p == PaneId::Methods
+            && self.session.methods.is_none()
+            && self.session.methods_error.is_none()
+            && !self.running.iter().any(|r| r.kind == JobKind::Methods)
+        {
+            self.start(JobRequest::Methods);
+        }
     }
 
     fn key(&mut self, k: KeyEvent) {
@@ -469,6 +491,12 @@ impl App {
             PaneId::Yield => {
                 self.ui.yields.selected = (self.ui.yields.selected as i64 + d).max(0) as usize;
             }
+            PaneId::Methods => {
+                let n = crate::panes::methods::view(&self.session, &self.ui)
+                    .chart_titles
+                    .len();
+                self.ui.methods.chart = step(self.ui.methods.chart, n);
+            }
             _ => {}
         }
     }
@@ -543,6 +571,10 @@ impl App {
                 KeyCode::Left | KeyCode::Char('h') => self.ui.study.next_quantity(false),
                 _ => {}
             },
+            PaneId::Methods if k.code == KeyCode::Char('r') => {
+                self.session.methods_error = None;
+                self.start(JobRequest::Methods);
+            }
             PaneId::Vision => {
                 let n = self.session.images.len();
                 match k.code {

@@ -89,7 +89,7 @@ fn hints(pane: PaneId) -> &'static str {
         PaneId::Study => "r run  f factor  h/l quantity",
         PaneId::Vision => "n/p image  j/k pin",
         PaneId::Yield => "j/k select",
-        PaneId::Methods => "",
+        PaneId::Methods => "j/k chart  r re-run",
     }
 }
 

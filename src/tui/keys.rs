@@ -60,4 +60,6 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ),
     ("Vision", "n p  → ←", "next / previous image"),
     ("Vision", "r", "inspect the images again"),
+    ("Methods", "j k", "choose the chart"),
+    ("Methods", "r", "run the quick methods lab again"),
 ];

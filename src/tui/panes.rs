@@ -4,7 +4,8 @@
 use super::draw::ImageCache;
 use super::theme::Theme;
 use super::widgets::{
-    bars_lines, block, draw_chart, format_value, kv_line, message, text_block, trunc, trunc_left,
+    ChartFrame, bars_lines, block, draw_chart, draw_chart_with, format_value, kv_line, message,
+    text_block, trunc, trunc_left,
 };
 use crate::panes::PaneView;
 use crate::panes::methods::MethodsView;
@@ -244,10 +245,23 @@ fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme) {
         );
         return;
     }
+    // Stacked charts share the time axis: only the last one labels it.
     let n = v.charts.len() as u32;
-    let rows = Layout::vertical(v.charts.iter().map(|_| Constraint::Ratio(1, n))).split(charts);
-    for (c, r) in v.charts.iter().zip(rows.iter()) {
-        draw_chart(f, *r, c, theme);
+    let b = block("", theme);
+    let inner = b.inner(charts);
+    f.render_widget(b, charts);
+    let rows = Layout::vertical(v.charts.iter().map(|_| Constraint::Ratio(1, n))).split(inner);
+    for (i, (c, r)) in v.charts.iter().zip(rows.iter()).enumerate() {
+        draw_chart_with(
+            f,
+            *r,
+            c,
+            theme,
+            ChartFrame {
+                border: false,
+                x_labels: i + 1 == v.charts.len(),
+            },
+        );
     }
 }
 
@@ -438,29 +452,41 @@ fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
             theme,
         ));
     }
-    let side_chart = v.chart.is_some() && side.height >= 24;
-    let chart_h = if side_chart { side.height / 3 } else { 0 };
-    let [info, chart_area] =
-        Layout::vertical([Constraint::Min(5), Constraint::Length(chart_h)]).areas(side);
-    if !v.figures.is_empty() {
-        lines.push(Line::raw(""));
-        lines.push(Line::styled(
-            format!("{:<18}{:>12}{:>10}", "figure", "value", "ideal"),
-            theme.header(),
-        ));
-        for r in &v.figures {
-            lines.push(Line::raw(format!(
-                "{:<18}{:>12}{:>10}",
-                trunc(&r.figure, 18),
-                r.value,
-                r.ideal
-            )));
-        }
-    }
     for n in &v.notes {
         lines.push(Line::styled(format!("note: {n}"), theme.muted()));
     }
+    let fig_h = if v.figures.is_empty() {
+        0
+    } else {
+        v.figures.len() as u16 + 3
+    };
+    let side_chart = v.chart.is_some() && side.height >= fig_h + 20;
+    let chart_h = if side_chart { side.height / 3 } else { 0 };
+    let [info, figs, chart_area] = Layout::vertical([
+        Constraint::Min(4),
+        Constraint::Length(fig_h),
+        Constraint::Length(chart_h),
+    ])
+    .areas(side);
     text_block(f, info, "Run", lines, theme);
+    if fig_h > 0 {
+        let rows: Vec<Row> = v
+            .figures
+            .iter()
+            .map(|r| Row::new(vec![r.figure.clone(), r.value.clone(), r.ideal.clone()]))
+            .collect();
+        let t = Table::new(
+            rows,
+            [
+                Constraint::Min(12),
+                Constraint::Length(10),
+                Constraint::Length(8),
+            ],
+        )
+        .header(Row::new(vec!["figure", "value", "ideal"]).style(theme.header()))
+        .block(block("Summary (reported revolutions)", theme));
+        f.render_widget(t, figs);
+    }
     if let (true, Some(c)) = (side_chart, &v.chart) {
         draw_chart(f, chart_area, c, theme);
     }
@@ -615,12 +641,79 @@ fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
 }
 
 fn methods(f: &mut Frame, area: Rect, v: &MethodsView, theme: &Theme) {
-    message(
-        f,
-        area,
-        "Methods",
-        v.message.as_deref().unwrap_or(""),
-        theme.muted(),
-        theme,
-    );
+    if !v.available {
+        message(
+            f,
+            area,
+            "Methods",
+            v.message.as_deref().unwrap_or(""),
+            theme.muted(),
+            theme,
+        );
+        return;
+    }
+    let [left, side] =
+        Layout::horizontal([Constraint::Percentage(60), Constraint::Percentage(40)]).areas(area);
+    match (&v.chart, &v.bars) {
+        (Some(c), _) => draw_chart(f, left, c, theme),
+        (None, Some(b)) => {
+            let lines = bars_lines(b, left.width.saturating_sub(2), theme);
+            text_block(f, left, &b.title, lines, theme);
+        }
+        _ => message(f, left, "Methods", "no chart", theme.muted(), theme),
+    }
+    let list_h = (v.chart_titles.len() as u16 + 2).min(side.height / 2);
+    let [list, info] =
+        Layout::vertical([Constraint::Length(list_h), Constraint::Min(3)]).areas(side);
+    let w = side.width.saturating_sub(4) as usize;
+    let rows: Vec<Row> = v
+        .chart_titles
+        .iter()
+        .map(|t| Row::new(vec![trunc(t, w)]))
+        .collect();
+    let t = Table::new(rows, [Constraint::Min(5)])
+        .row_highlight_style(theme.selected())
+        .block(block(
+            format!(
+                "Charts ({}, {} effort)",
+                v.chart_titles.len(),
+                v.effort.clone().unwrap_or_default()
+            ),
+            theme,
+        ));
+    let mut st = TableState::default().with_selected(Some(v.selected));
+    f.render_stateful_widget(t, list, &mut st);
+    let mut lines = vec![Line::styled(
+        "stable step: measured / predicted",
+        theme.header(),
+    )];
+    for r in &v.stability {
+        lines.push(Line::raw(trunc(
+            &format!(
+                "{:<7} ω {:.2e}  {}",
+                r.method,
+                r.omega_contact,
+                r.ratio
+                    .map(|x| format!("{x:.2}"))
+                    .unwrap_or_else(|| "–".into())
+            ),
+            w + 2,
+        )));
+    }
+    if !v.fidelity.is_empty() {
+        lines.push(Line::styled("fidelity", theme.header()));
+        for (c, rpm, level, _) in &v.fidelity {
+            lines.push(Line::raw(format!("c {c} mm {rpm} rpm → {level}")));
+        }
+    }
+    if !v.failures.is_empty() {
+        lines.push(Line::styled("failure modes", theme.header()));
+        for (what, m, o) in &v.failures {
+            lines.push(Line::styled(
+                trunc(&format!("{m}: {what}: {o}"), w + 2),
+                theme.muted(),
+            ));
+        }
+    }
+    text_block(f, info, "Tables", lines, theme);
 }

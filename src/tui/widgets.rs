@@ -17,10 +17,33 @@ pub fn block<'a>(title: impl Into<Line<'a>>, theme: &Theme) -> Block<'a> {
         .title(title.into().style(theme.title()))
 }
 
+/// How a chart is framed.
+#[derive(Debug, Clone, Copy)]
+pub struct ChartFrame {
+    /// A full border (else only the title on the top line).
+    pub border: bool,
+    /// Labels under the x axis.
+    pub x_labels: bool,
+}
+
+/// Draws a chart in a bordered block with both axes labelled.
+pub fn draw_chart(f: &mut Frame, area: Rect, c: &ChartView, theme: &Theme) {
+    draw_chart_with(
+        f,
+        area,
+        c,
+        theme,
+        ChartFrame {
+            border: true,
+            x_labels: true,
+        },
+    )
+}
+
 /// Draws a chart: every series run as a line dataset (runs split at the
 /// view's NaN separators), vertical markers as two-point lines, three
 /// labels per axis.
-pub fn draw_chart(f: &mut Frame, area: Rect, c: &ChartView, theme: &Theme) {
+pub fn draw_chart_with(f: &mut Frame, area: Rect, c: &ChartView, theme: &Theme, frame: ChartFrame) {
     if area.height < 3 || area.width < 10 {
         return;
     }
@@ -70,18 +93,25 @@ pub fn draw_chart(f: &mut Frame, area: Rect, c: &ChartView, theme: &Theme) {
     } else {
         format!("{} [{}]", c.title, c.y_label)
     };
+    let blk = if frame.border {
+        block(title, theme)
+    } else {
+        Block::new()
+            .borders(ratatui::widgets::Borders::TOP)
+            .border_style(theme.border())
+            .title(Line::from(title).style(theme.title()))
+    };
+    let mut x_axis = Axis::default().bounds(c.x_bounds).style(theme.border());
+    if frame.x_labels {
+        x_axis = x_axis.labels(
+            c.x_ticks
+                .iter()
+                .map(|t| Span::styled(t.clone(), theme.muted())),
+        );
+    }
     let chart = Chart::new(datasets)
-        .block(block(title, theme))
-        .x_axis(
-            Axis::default()
-                .bounds(c.x_bounds)
-                .labels(
-                    c.x_ticks
-                        .iter()
-                        .map(|t| Span::styled(t.clone(), theme.muted())),
-                )
-                .style(theme.border()),
-        )
+        .block(blk)
+        .x_axis(x_axis)
         .y_axis(
             Axis::default()
                 .bounds(c.y_bounds)

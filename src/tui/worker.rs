@@ -20,6 +20,7 @@ pub enum JobKind {
     Model,
     Study,
     Load,
+    Methods,
 }
 
 /// A unit of background work.
@@ -36,6 +37,7 @@ pub enum JobRequest {
     Load {
         paths: Vec<PathBuf>,
     },
+    Methods,
 }
 
 impl JobRequest {
@@ -44,6 +46,7 @@ impl JobRequest {
             JobRequest::Model { .. } => JobKind::Model,
             JobRequest::Study { .. } => JobKind::Study,
             JobRequest::Load { .. } => JobKind::Load,
+            JobRequest::Methods => JobKind::Methods,
         }
     }
 
@@ -51,6 +54,7 @@ impl JobRequest {
         match self {
             JobRequest::Model { .. } => "model".into(),
             JobRequest::Study { setup, .. } => format!("study ({} cases)", setup.grid.len()),
+            JobRequest::Methods => "methods lab (quick)".into(),
             JobRequest::Load { paths } => match paths.as_slice() {
                 [one] => format!("opening {}", one.display()),
                 many => format!("opening {} paths", many.len()),
@@ -65,6 +69,7 @@ pub enum JobOutput {
     Model(Box<Result<ModelRun, String>>),
     Study(Box<SweepResult>),
     Loaded(Vec<Loaded>),
+    Methods(Box<crate::methods::dynamics::DynamicsLab>),
     /// The job panicked (a defect): the message, for the status line.
     Failed(String),
 }
@@ -77,6 +82,9 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
         }
         JobRequest::Study { params, setup } => {
             JobOutput::Study(Box::new(run_study(&params, &setup, progress)))
+        }
+        JobRequest::Methods => {
+            JobOutput::Methods(Box::new(crate::panes::session::run_methods(progress)))
         }
         JobRequest::Load { paths } => {
             let mut out = Vec::new();
