@@ -89,6 +89,35 @@ pub struct Channel {
     pub t_s: Vec<f64>,
     #[serde(skip)]
     pub values: Vec<f64>,
+    /// Block extremes of `values`, built on first use (long channels).
+    #[serde(skip)]
+    pub blocks: std::sync::OnceLock<super::chart::MinMaxBlocks>,
+}
+
+impl Channel {
+    pub fn new(
+        name: impl Into<String>,
+        unit: impl Into<String>,
+        t_s: Vec<f64>,
+        values: Vec<f64>,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            unit: unit.into(),
+            t_s,
+            values,
+            blocks: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// The block extremes (built once; None for short channels, where a
+    /// plain scan is as fast).
+    pub fn blocks(&self) -> Option<&super::chart::MinMaxBlocks> {
+        (self.values.len() >= 16 * super::chart::BLOCK).then(|| {
+            self.blocks
+                .get_or_init(|| super::chart::MinMaxBlocks::new(&self.values))
+        })
+    }
 }
 
 /// A time series source for the Signals pane: a rig log's channels, or the
@@ -370,12 +399,8 @@ pub fn predicted_signals(run: &ModelRun) -> SignalSet {
     if let Some(c) = &run.result.curves {
         let t0 = c.t_s.first().copied().unwrap_or(0.0);
         let t: Vec<f64> = c.t_s.iter().map(|t| t - t0).collect();
-        let ch = |name: &str, unit: &str, v: &Vec<f64>| Channel {
-            name: name.into(),
-            unit: unit.into(),
-            t_s: t.clone(),
-            values: v.clone(),
-        };
+        let ch =
+            |name: &str, unit: &str, v: &Vec<f64>| Channel::new(name, unit, t.clone(), v.clone());
         channels.push(ch("stroke", "mm", &c.stroke_mm));
         channels.push(ch("force", "N", &c.process_force_n));
         channels.push(ch("torque", "N·m", &c.torque_nm));

@@ -8,7 +8,7 @@
 //! and says so.
 
 use super::chart::{
-    ChartView, MarkerKind, SeriesKind, SeriesView, VMarker, decimate_minmax, value_at,
+    ChartView, MarkerKind, SeriesKind, SeriesView, VMarker, decimate_minmax_with, value_at,
 };
 use super::session::Session;
 use super::{PaneState, csv_table, fmt_opt, parse_f64, parse_usize};
@@ -249,7 +249,8 @@ pub fn view(s: &Session, ui: &PaneState) -> SignalsView {
         .cursor
         .unwrap_or(0.5 * (window[0] + window[1]))
         .clamp(full[0], full[1]);
-    let cols = 2 * (ui.width.saturating_sub(SIDE_COLS + 10).max(8) as usize);
+    // One column per terminal cell: at most two points (min, max) per cell.
+    let cols = ui.width.saturating_sub(SIDE_COLS + 10).max(8) as usize;
     let cycle_at_cursor = set
         .cycles
         .iter()
@@ -267,7 +268,7 @@ pub fn view(s: &Session, ui: &PaneState) -> SignalsView {
     let n_ch = set.channels.len();
     for (i, c) in set.channels.iter().enumerate() {
         let visible = !st.hidden.contains(&c.name);
-        let pts = decimate_minmax(&c.t_s, &c.values, window[0], window[1], cols);
+        let pts = decimate_minmax_with(&c.t_s, &c.values, c.blocks(), window[0], window[1], cols);
         let lo = c.t_s.partition_point(|&t| t < window[0]);
         let hi = c.t_s.partition_point(|&t| t <= window[1]);
         let (mut mn, mut mx) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -304,7 +305,7 @@ pub fn view(s: &Session, ui: &PaneState) -> SignalsView {
             }],
             Some(window),
         );
-        if in_view.len() <= max_markers(cols / 2) {
+        if in_view.len() <= max_markers(cols) {
             chart.markers.extend(in_view.iter().map(|(t, k)| VMarker {
                 x: *t,
                 kind: MarkerKind::Cycle,
