@@ -273,3 +273,37 @@ fn no_color_draws_without_colours_but_keeps_reverse_and_bold() {
         }
     }
 }
+
+#[test]
+fn an_opened_image_is_drawn_with_half_blocks_and_next_previous_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (i, name) in ["a.png", "b.png"].iter().enumerate() {
+        let img = image::RgbImage::from_fn(64, 48, |x, y| {
+            if (x / 8 + y / 8 + i as u32) % 2 == 0 {
+                image::Rgb([230, 230, 230])
+            } else {
+                image::Rgb([20, 20, 20])
+            }
+        });
+        img.save(dir.path().join(name)).unwrap();
+    }
+    let mut app = new_app();
+    app.update(Msg::Paste(dir.path().display().to_string()));
+    run_jobs(&mut app);
+    assert_eq!(app.session.images.len(), 2);
+    app.update(key(KeyCode::Char('6')));
+    let s = screen(&app, 100, 30);
+    assert!(s.contains("a.png (1/2)"), "{s}");
+    assert!(
+        s.contains('▀') || s.contains('▄'),
+        "half-block image expected:\n{s}"
+    );
+    app.update(key(KeyCode::Char('n')));
+    assert!(screen(&app, 100, 30).contains("b.png (2/2)"));
+    app.update(key(KeyCode::Char('n')));
+    assert!(screen(&app, 100, 30).contains("a.png (1/2)"));
+    // Without colour the image is not drawn (half-blocks need colour).
+    let mut img = ImageCache::halfblocks();
+    let s = buffer_text(&render_app(&app, 100, 30, &Theme::plain(), &mut img));
+    assert!(s.contains("image hidden (NO_COLOR)"), "{s}");
+}

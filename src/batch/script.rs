@@ -534,10 +534,10 @@ impl Runner {
                     return err(index, "run", "study", "the study did not run");
                 };
                 let d = format!(
-                    "{} cases, {} failed, {:.1} s",
+                    "{} cases, {} failed, {:.0} ms",
                     r.cases.len(),
                     r.failed,
-                    start.elapsed().as_secs_f64()
+                    start.elapsed().as_secs_f64() * 1e3
                 );
                 if r.failed > 0 {
                     let first = r

@@ -265,11 +265,8 @@ fn figures(s: &Summary) -> Vec<FigureRow> {
             fmt_opt(s.peak_process_force_n, 3),
             "–".into(),
         ),
-        f(
-            "work",
-            format!("{} steps, {} rhs", s.steps, s.rhs_evals),
-            "–".into(),
-        ),
+        f("steps", s.steps.to_string(), "–".into()),
+        f("rhs evaluations", s.rhs_evals.to_string(), "–".into()),
     ]
 }
 

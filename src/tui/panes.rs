@@ -61,10 +61,14 @@ fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme) {
         Line::from(Span::styled(v.title.clone(), theme.header())),
         kv_line(
             "parameters",
-            format!(
-                "{} (preset {}), level {}",
-                v.params_source, v.preset, v.level
-            ),
+            if v.params_source.starts_with("preset ") {
+                format!("{}, level {}", v.params_source, v.level)
+            } else {
+                format!(
+                    "{} (preset {}), level {}",
+                    v.params_source, v.preset, v.level
+                )
+            },
             theme,
         ),
         kv_line(
@@ -205,8 +209,11 @@ fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme) {
         kv_line(
             "cycle",
             match v.cycle_at_cursor {
-                Some(k) => format!("{k} ({} of {} in view)", v.cycles_in_view, v.cycles_total),
-                None => format!("– ({} marks)", v.cycles_total),
+                Some(k) => format!(
+                    "{k} ({}/{} starts in view)",
+                    v.cycles_in_view, v.cycles_total
+                ),
+                None => format!("– ({} starts)", v.cycles_total),
             },
             theme,
         ),
