@@ -210,7 +210,7 @@ fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme) {
             "cycle",
             match v.cycle_at_cursor {
                 Some(k) => format!(
-                    "{k} ({}/{} starts in view)",
+                    "{k} ({}/{} in view)",
                     v.cycles_in_view, v.cycles_total
                 ),
                 None => format!("– ({} starts)", v.cycles_total),
