@@ -1,1 +1,269 @@
-//! (in progress)
+//! The terminal front end (ratatui + crossterm). It draws view models from
+//! [`crate::panes`] and nothing else.
+//!
+//! - [`app`]: state, messages and the update function.
+//! - [`worker`]: background jobs (model, study, loading) with progress and cancel.
+//! - [`draw`]: the screen (tabs, status line, help, prompt) and the image cache.
+//! - [`panes`]: drawing of each pane's view.
+//! - [`theme`]: colours (16-colour safe, `NO_COLOR`).
+//! - [`keys`]: every key, for the help overlay and the docs.
+//!
+//! The loop redraws only when something changed (a key, a resize, a job's
+//! progress or result), and ratatui sends only the cells that differ from
+//! the previous frame, so a slow SSH link carries little.
+
+pub mod app;
+pub mod draw;
+pub mod keys;
+pub mod panes;
+pub mod theme;
+pub mod widgets;
+pub mod worker;
+
+use crate::panes::Session;
+use app::{App, Msg};
+use draw::{ImageCache, draw_screen};
+use ratatui::Terminal;
+use ratatui::backend::{Backend, TestBackend};
+use ratatui::buffer::Buffer;
+use std::io::Write;
+use std::time::{Duration, Instant};
+use theme::Theme;
+use worker::Worker;
+
+/// How to start the TUI.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Image protocol: `auto` (ask the terminal), `halfblocks`, `off`.
+    pub images: draw::ImageMode,
+    /// Overrides the colour detection (`NO_COLOR`, `COLORTERM`, `TERM`).
+    pub theme: Option<Theme>,
+    /// Start on this pane.
+    pub pane: crate::panes::PaneId,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            images: draw::ImageMode::Auto,
+            theme: None,
+            pane: crate::panes::PaneId::Session,
+        }
+    }
+}
+
+/// Draws one screen of `app` into a buffer of `width`×`height` cells
+/// (headless: tests, `pinsight render`, benchmarks).
+pub fn render_app(
+    app: &App,
+    width: u16,
+    height: u16,
+    theme: &Theme,
+    img: &mut ImageCache,
+) -> Buffer {
+    let view = app.view();
+    let chrome = app.chrome();
+    render_view(&chrome, &view, width, height, theme, img)
+}
+
+/// Draws a view with its chrome into a buffer.
+pub fn render_view(
+    chrome: &draw::Chrome,
+    view: &crate::panes::PaneView,
+    width: u16,
+    height: u16,
+    theme: &Theme,
+    img: &mut ImageCache,
+) -> Buffer {
+    let backend = TestBackend::new(width, height);
+    let mut terminal = match Terminal::new(backend) {
+        Ok(t) => t,
+        Err(_) => return Buffer::empty(ratatui::layout::Rect::new(0, 0, width, height)),
+    };
+    let _ = terminal.draw(|f| draw_screen(f, chrome, view, theme, img));
+    terminal.backend().buffer().clone()
+}
+
+/// A buffer's characters as text lines (trailing spaces trimmed), as
+/// `pinsight render` prints them.
+pub fn buffer_text(buf: &Buffer) -> String {
+    let area = buf.area;
+    let mut out = String::new();
+    for y in 0..area.height {
+        let mut line = String::new();
+        let mut skip = 0usize;
+        for x in 0..area.width {
+            if skip > 0 {
+                skip -= 1;
+                continue;
+            }
+            let sym = buf[(x, y)].symbol();
+            line.push_str(sym);
+            let w = unicode_width(sym);
+            if w > 1 {
+                skip = w - 1;
+            }
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+fn unicode_width(s: &str) -> usize {
+    use ratatui::text::Span;
+    Span::raw(s).width().max(1)
+}
+
+/// Restores the terminal (raw mode off, main screen, mouse and paste off).
+fn restore_terminal() {
+    let mut out = std::io::stdout();
+    let _ = crossterm::execute!(
+        out,
+        crossterm::event::DisableBracketedPaste,
+        crossterm::event::DisableMouseCapture
+    );
+    ratatui::restore();
+    let _ = out.flush();
+}
+
+/// Restores the terminal when the UI thread panics (worker panics are
+/// caught and reported in the status line, without touching the screen).
+fn install_panic_hook() {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let on_ui = std::thread::current().name() == Some("main");
+        if on_ui {
+            restore_terminal();
+            previous(info);
+        }
+    }));
+}
+
+/// Runs the TUI on a session until the user quits.
+pub fn run(session: Session, opts: Options) -> anyhow::Result<()> {
+    let start = Instant::now();
+    // NO_COLOR is applied by the theme; crossterm's own handling would emit
+    // empty colour codes that reset bold and reverse video (pitfalls.md).
+    crossterm::style::force_color_output(true);
+    let theme = opts.theme.unwrap_or_else(Theme::detect);
+    install_panic_hook();
+    let mut terminal = ratatui::try_init()?;
+    let result = (|| -> anyhow::Result<()> {
+        crossterm::execute!(
+            std::io::stdout(),
+            crossterm::event::EnableBracketedPaste,
+            crossterm::event::EnableMouseCapture
+        )?;
+        let size = terminal.size()?;
+        let mut app = App::new(session, size.width, size.height);
+        app.pane = opts.pane;
+        // Background work starts before the first frame.
+        let worker = Worker::default();
+        for (id, req, progress) in app.take_requests() {
+            worker.spawn(id, req, progress);
+        }
+        let colours = match theme.depth {
+            theme::ColorDepth::None => "no colour (NO_COLOR)",
+            theme::ColorDepth::Ansi16 => "16 colours",
+            theme::ColorDepth::Ansi256 => "256 colours",
+            theme::ColorDepth::TrueColor => "truecolor",
+        };
+        // First frame at once; the image protocol query comes after it (it
+        // can wait for the terminal) but before any input event is read.
+        let mut img = ImageCache::off();
+        if opts.images == draw::ImageMode::Auto {
+            app.session.display = Some(format!("{colours}; images: asking the terminal…"));
+        }
+        {
+            let view = app.view();
+            let chrome = app.chrome();
+            terminal.draw(|f| draw_screen(f, &chrome, &view, &theme, &mut img))?;
+        }
+        if let Ok(path) = std::env::var("PINSIGHT_FIRST_FRAME_LOG") {
+            let _ = std::fs::write(
+                path,
+                format!("{:.3}\n", start.elapsed().as_secs_f64() * 1e3),
+            );
+        }
+        img = match opts.images {
+            draw::ImageMode::Auto => ImageCache::query_terminal(),
+            draw::ImageMode::Halfblocks => ImageCache::halfblocks(),
+            draw::ImageMode::Off => ImageCache::off(),
+        };
+        app.session.display = Some(format!("{colours}; images: {}", img.protocol_name()));
+        event_loop(&mut terminal, &mut app, &worker, &theme, &mut img)
+    })();
+    restore_terminal();
+    result
+}
+
+fn event_loop<B: Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+    worker: &Worker,
+    theme: &Theme,
+    img: &mut ImageCache,
+) -> anyhow::Result<()>
+where
+    B::Error: Send + Sync + 'static,
+{
+    use crossterm::event::{self, Event};
+    let mut dirty = true;
+    let mut last_progress: Vec<(u64, u64, u64)> = Vec::new();
+    loop {
+        for (id, req, progress) in app.take_requests() {
+            worker.spawn(id, req, progress);
+        }
+        if dirty {
+            let view = app.view();
+            let chrome = app.chrome();
+            terminal.draw(|f| draw_screen(f, &chrome, &view, theme, img))?;
+            dirty = false;
+        }
+        if app.quit {
+            for r in &app.running {
+                r.progress.cancel();
+            }
+            return Ok(());
+        }
+        let timeout = if app.running.is_empty() {
+            Duration::from_millis(500)
+        } else {
+            Duration::from_millis(100)
+        };
+        if event::poll(timeout)? {
+            // Drain every pending event before drawing again.
+            loop {
+                let msg = match event::read()? {
+                    Event::Key(k) => Some(Msg::Key(k)),
+                    Event::Mouse(m) => Some(Msg::Mouse(m)),
+                    Event::Paste(s) => Some(Msg::Paste(s)),
+                    Event::Resize(w, h) => Some(Msg::Resize(w, h)),
+                    _ => None,
+                };
+                if let Some(m) = msg {
+                    app.update(m);
+                    dirty = true;
+                }
+                if app.quit || !event::poll(Duration::ZERO)? {
+                    break;
+                }
+            }
+        }
+        for (id, out) in worker.poll() {
+            app.update(Msg::JobDone(id, Box::new(out)));
+            dirty = true;
+        }
+        // Redraw for a gauge only when a job's progress moved.
+        let now: Vec<(u64, u64, u64)> = app
+            .running
+            .iter()
+            .map(|r| (r.id, r.progress.done(), r.progress.total()))
+            .collect();
+        if now != last_progress {
+            last_progress = now;
+            dirty = true;
+        }
+    }
+}

@@ -1,0 +1,414 @@
+//! The screen: tab bar, the active pane, the status line (hints, messages,
+//! or the gauge of the running background work), the `?` help overlay and
+//! the open-file prompt. The TUI and `pinsight render` both draw through
+//! [`draw_screen`], so headless output is exactly what the terminal shows.
+
+use super::keys::KEYS;
+use super::panes::draw_pane;
+use super::theme::Theme;
+use super::widgets::{block, trunc};
+use crate::panes::{PaneId, PaneView};
+use ratatui::Frame;
+use ratatui::layout::{Constraint, Layout, Rect, Size};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Clear, Gauge, Paragraph, Row, Table};
+use ratatui_image::picker::{Picker, ProtocolType};
+use ratatui_image::protocol::Protocol;
+use ratatui_image::{FilterType, Image, Resize};
+use std::sync::Arc;
+
+/// What the status line shows.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Status {
+    /// Key hints for the pane.
+    Hints,
+    /// A message (error or not).
+    Message { text: String, error: bool },
+    /// Background work: its label, fraction done, counts.
+    Job {
+        label: String,
+        fraction: f64,
+        done: u64,
+        total: u64,
+        more: usize,
+    },
+}
+
+/// Everything around the pane.
+#[derive(Debug, Clone)]
+pub struct Chrome {
+    pub pane: PaneId,
+    pub title: String,
+    pub status: Status,
+    pub help: bool,
+    pub help_scroll: usize,
+    /// The open-file prompt's text, while it is open.
+    pub prompt: Option<String>,
+}
+
+impl Chrome {
+    pub fn new(pane: PaneId, title: impl Into<String>) -> Self {
+        Self {
+            pane,
+            title: title.into(),
+            status: Status::Hints,
+            help: false,
+            help_scroll: 0,
+            prompt: None,
+        }
+    }
+}
+
+/// Tab labels fitting `width`, with their column ranges (for mouse clicks).
+pub fn tabs(width: u16) -> Vec<(PaneId, String, u16, u16)> {
+    let full: u16 = PaneId::ALL.iter().map(|p| p.title().len() as u16 + 3).sum();
+    let short = full > width;
+    let mut x = 0u16;
+    let mut out = Vec::new();
+    for (i, p) in PaneId::ALL.iter().enumerate() {
+        let name = if short {
+            p.title().chars().take(3).collect::<String>()
+        } else {
+            p.title().to_string()
+        };
+        let label = format!(" {} {} ", i + 1, name);
+        let w = label.chars().count() as u16;
+        out.push((*p, label, x, x + w));
+        x += w;
+    }
+    out
+}
+
+/// Key hints per pane.
+fn hints(pane: PaneId) -> &'static str {
+    match pane {
+        PaneId::Session => "j/k select  o open",
+        PaneId::Signals => "h/l cursor  H/L pan  +/- zoom  [ ] cycle  space channel  0 all",
+        PaneId::Overlay => "n/p cycle  a envelope",
+        PaneId::Model => "j/k select  Enter edit  r re-run",
+        PaneId::Study => "r run  f factor  h/l quantity",
+        PaneId::Vision => "n/p image  j/k pin",
+        PaneId::Yield => "j/k select",
+        PaneId::Methods => "j/k chart  r re-run",
+    }
+}
+
+/// Draws the whole screen.
+pub fn draw_screen(
+    f: &mut Frame,
+    chrome: &Chrome,
+    view: &PaneView,
+    theme: &Theme,
+    img: &mut ImageCache,
+) {
+    let area = f.area();
+    f.render_widget(Paragraph::new("").style(theme.base()), area);
+    if area.height < 3 || area.width < 20 {
+        f.render_widget(Paragraph::new("pinsight: window too small"), area);
+        return;
+    }
+    let [top, body, bottom] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Min(1),
+        Constraint::Length(1),
+    ])
+    .areas(area);
+    // Tab bar.
+    let mut spans = Vec::new();
+    for (p, label, _, _) in tabs(area.width) {
+        let style = if p == chrome.pane {
+            theme.selected()
+        } else {
+            theme.muted()
+        };
+        spans.push(Span::styled(label, style));
+    }
+    let used: usize = spans.iter().map(|s| s.content.chars().count()).sum();
+    let room = (area.width as usize).saturating_sub(used + 1);
+    if room > 8 {
+        spans.push(Span::styled(
+            format!(" {}", trunc(&chrome.title, room)),
+            theme.muted(),
+        ));
+    }
+    f.render_widget(Paragraph::new(Line::from(spans)), top);
+    draw_pane(f, body, view, theme, img);
+    // Status line.
+    match &chrome.status {
+        Status::Hints => {
+            let h = hints(chrome.pane);
+            let line = Line::from(vec![
+                Span::styled("?", theme.key()),
+                Span::styled(" help  ", theme.muted()),
+                Span::styled("q", theme.key()),
+                Span::styled(" quit  ", theme.muted()),
+                Span::styled("Tab", theme.key()),
+                Span::styled(" pane  ", theme.muted()),
+                Span::styled(h, theme.muted()),
+            ]);
+            f.render_widget(Paragraph::new(line), bottom);
+        }
+        Status::Message { text, error } => {
+            let style = if *error { theme.error() } else { theme.ok() };
+            f.render_widget(
+                Paragraph::new(Line::styled(trunc(text, area.width as usize), style)),
+                bottom,
+            );
+        }
+        Status::Job {
+            label,
+            fraction,
+            done,
+            total,
+            more,
+        } => {
+            let extra = if *more > 0 {
+                format!(" (+{more} queued)")
+            } else {
+                String::new()
+            };
+            let text = if *total > 0 {
+                format!("{label} {done}/{total}{extra} — Esc/c cancels")
+            } else {
+                format!("{label}{extra} — Esc/c cancels")
+            };
+            f.render_widget(
+                Gauge::default()
+                    .ratio(fraction.clamp(0.0, 1.0))
+                    .label(trunc(&text, area.width as usize))
+                    .gauge_style(theme.gauge())
+                    .use_unicode(true),
+                bottom,
+            );
+        }
+    }
+    if let Some(p) = &chrome.prompt {
+        prompt(f, body, p, theme);
+    }
+    if chrome.help {
+        help(f, body, chrome.help_scroll, theme);
+    }
+}
+
+/// A centred rectangle of at most `w`×`h` inside `area`.
+pub fn centered(area: Rect, w: u16, h: u16) -> Rect {
+    let w = w.min(area.width);
+    let h = h.min(area.height);
+    Rect::new(
+        area.x + (area.width - w) / 2,
+        area.y + (area.height - h) / 2,
+        w,
+        h,
+    )
+}
+
+fn prompt(f: &mut Frame, body: Rect, text: &str, theme: &Theme) {
+    let r = centered(body, body.width.saturating_sub(4).min(100), 5);
+    f.render_widget(Clear, r);
+    let lines = vec![
+        Line::from(vec![
+            Span::styled("path: ", theme.key()),
+            Span::raw(format!("{text}▏")),
+        ]),
+        Line::styled(
+            "a rig log, image, recipe, parameter file or folder — Enter opens, Esc cancels",
+            theme.muted(),
+        ),
+    ];
+    f.render_widget(
+        Paragraph::new(lines).block(block("Open", theme).border_style(theme.border_focus())),
+        r,
+    );
+}
+
+/// Lines the help table has (for scrolling).
+pub fn help_rows() -> usize {
+    KEYS.len()
+}
+
+fn help(f: &mut Frame, body: Rect, scroll: usize, theme: &Theme) {
+    let r = centered(body, body.width.saturating_sub(2).min(110), body.height);
+    f.render_widget(Clear, r);
+    let visible = r.height.saturating_sub(3) as usize;
+    let scroll = scroll.min(KEYS.len().saturating_sub(visible));
+    let mut last = "";
+    let rows: Vec<Row> = KEYS
+        .iter()
+        .enumerate()
+        .map(|(i, (ctx, keys, what))| {
+            // The context is named on the first row of its group (and on the
+            // first visible row).
+            let c = if *ctx != last || i == scroll {
+                *ctx
+            } else {
+                ""
+            };
+            last = ctx;
+            Row::new(vec![
+                Span::styled(c.to_string(), theme.header()),
+                Span::styled(keys.to_string(), theme.key()),
+                Span::raw(what.to_string()),
+            ])
+        })
+        .skip(scroll)
+        .collect();
+    let more = if scroll + visible < KEYS.len() {
+        " — j/k scroll"
+    } else {
+        ""
+    };
+    let t = Table::new(
+        rows,
+        [
+            Constraint::Length(11),
+            Constraint::Length(15),
+            Constraint::Min(10),
+        ],
+    )
+    .block(
+        block(format!("Help — every key (? or Esc closes){more}"), theme)
+            .border_style(theme.border_focus()),
+    );
+    f.render_widget(t, r);
+}
+
+/// How connector images are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageMode {
+    /// The terminal's best protocol (kitty, sixel, iTerm2) or half-blocks.
+    Auto,
+    /// Unicode half-blocks (deterministic; tests and `render`).
+    Halfblocks,
+    /// No image (the pin table and verdicts only).
+    Off,
+}
+
+/// How long the image protocol query waits for the terminal's first reply.
+pub const QUERY_TIMEOUT_MS: u64 = 1000;
+
+/// The terminal image of the Vision pane, encoded once per image and size.
+pub struct ImageCache {
+    picker: Picker,
+    mode: ImageMode,
+    key: Option<(usize, u16, u16)>,
+    proto: Option<Protocol>,
+}
+
+impl ImageCache {
+    /// Half-blocks with a fixed cell size: the same output everywhere.
+    pub fn halfblocks() -> Self {
+        Self {
+            picker: Picker::halfblocks(),
+            mode: ImageMode::Halfblocks,
+            key: None,
+            proto: None,
+        }
+    }
+
+    /// No images at all.
+    pub fn off() -> Self {
+        Self {
+            mode: ImageMode::Off,
+            ..Self::halfblocks()
+        }
+    }
+
+    /// Asks the terminal what it can show (kitty / sixel / iTerm2, font
+    /// size), falling back to half-blocks. It reads the terminal's replies
+    /// from stdin, so it must run before input events are read.
+    ///
+    /// When nothing answers (a detached tmux, tmux without passthrough, a
+    /// terminal that ignores the queries) ratatui-image gives up after the
+    /// timeout but leaves its reader thread blocked on stdin, where it would
+    /// swallow the user's first keys. A plain Device Status Report (not
+    /// wrapped for tmux passthrough, so tmux itself answers it) ends that
+    /// read: the reply is the "status" the reader waits for. If the reader
+    /// had already finished, crossterm receives the reply and drops it as
+    /// an unknown sequence.
+    pub fn query_terminal() -> Self {
+        let opts = ratatui_image::picker::cap_parser::QueryStdioOptions {
+            timeout: std::time::Duration::from_millis(QUERY_TIMEOUT_MS),
+            ..Default::default()
+        };
+        let picker =
+            Picker::from_query_stdio_with_options(opts).unwrap_or_else(|_| Picker::halfblocks());
+        if picker.capabilities().is_empty() {
+            use std::io::Write;
+            let mut out = std::io::stdout();
+            let _ = out.write_all(b"\x1b[5n");
+            let _ = out.flush();
+            std::thread::sleep(std::time::Duration::from_millis(30));
+        }
+        Self {
+            picker,
+            mode: ImageMode::Auto,
+            key: None,
+            proto: None,
+        }
+    }
+
+    pub fn protocol_name(&self) -> &'static str {
+        if self.mode == ImageMode::Off {
+            return "off";
+        }
+        match self.picker.protocol_type() {
+            ProtocolType::Halfblocks => "half-blocks",
+            ProtocolType::Sixel => "sixel",
+            ProtocolType::Kitty => "kitty",
+            ProtocolType::Iterm2 => "iTerm2",
+        }
+    }
+
+    /// Draws `image` fitted into `area` (aspect kept, smooth downsampling so
+    /// small pins survive, pitfalls.md).
+    pub fn draw(
+        &mut self,
+        f: &mut Frame,
+        area: Rect,
+        image: Option<&Arc<image::RgbImage>>,
+        theme: &Theme,
+    ) {
+        let Some(image) = image else {
+            f.render_widget(
+                Paragraph::new("no image").style(theme.muted()).centered(),
+                area,
+            );
+            return;
+        };
+        if self.mode == ImageMode::Off || !theme.colored() || area.width < 4 || area.height < 2 {
+            let why = if theme.colored() {
+                "image display is off"
+            } else {
+                "image hidden (NO_COLOR): see the pin table"
+            };
+            f.render_widget(Paragraph::new(why).style(theme.muted()).centered(), area);
+            return;
+        }
+        let key = (Arc::as_ptr(image) as usize, area.width, area.height);
+        if self.key != Some(key) {
+            let dynimg = image::DynamicImage::ImageRgb8((**image).clone());
+            self.proto = self
+                .picker
+                .new_protocol(
+                    dynimg,
+                    Size::new(area.width, area.height),
+                    Resize::Scale(Some(FilterType::Triangle)),
+                )
+                .ok();
+            self.key = Some(key);
+        }
+        match &self.proto {
+            Some(p) => {
+                f.render_widget(Image::new(p), area);
+                if self.picker.protocol_type() == ProtocolType::Halfblocks {
+                    theme.downgrade(f.buffer_mut(), area);
+                }
+            }
+            None => f.render_widget(
+                Paragraph::new("the image could not be encoded for this terminal")
+                    .style(theme.warn()),
+                area,
+            ),
+        }
+    }
+}

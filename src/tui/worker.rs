@@ -1,0 +1,148 @@
+//! Background work: each job runs on its own thread with a shared
+//! [`Progress`] (the status-line gauge reads it, Esc / `c` cancels it) and
+//! sends its output back over a channel. The UI thread never waits on it.
+//!
+//! A job is a plain request ([`JobRequest`]) executed by [`execute`], a
+//! pure function also used by tests to run jobs in line.
+
+use crate::model::params::Params;
+use crate::panes::session::{Loaded, ModelRun, StudySetup, load_path, run_model, run_study};
+use crate::progress::Progress;
+use crate::sim::LevelChoice;
+use crate::sim::sweep::SweepResult;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
+
+/// What kind of work a job does (a new job of a kind supersedes the running one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JobKind {
+    Model,
+    Study,
+    Load,
+    Methods,
+}
+
+/// A unit of background work.
+#[derive(Debug, Clone)]
+pub enum JobRequest {
+    Model {
+        params: Box<Params>,
+        level: LevelChoice,
+    },
+    Study {
+        params: Box<Params>,
+        setup: StudySetup,
+    },
+    Load {
+        paths: Vec<PathBuf>,
+    },
+    Methods,
+}
+
+impl JobRequest {
+    pub fn kind(&self) -> JobKind {
+        match self {
+            JobRequest::Model { .. } => JobKind::Model,
+            JobRequest::Study { .. } => JobKind::Study,
+            JobRequest::Load { .. } => JobKind::Load,
+            JobRequest::Methods => JobKind::Methods,
+        }
+    }
+
+    pub fn label(&self) -> String {
+        match self {
+            JobRequest::Model { .. } => "model".into(),
+            JobRequest::Study { setup, .. } => format!("study ({} cases)", setup.grid.len()),
+            JobRequest::Methods => "methods lab (quick)".into(),
+            JobRequest::Load { paths } => match paths.as_slice() {
+                [one] => format!("opening {}", one.display()),
+                many => format!("opening {} paths", many.len()),
+            },
+        }
+    }
+}
+
+/// What a job produced.
+#[derive(Debug, Clone)]
+pub enum JobOutput {
+    Model(Box<Result<ModelRun, String>>),
+    Study(Box<SweepResult>),
+    Loaded(Vec<Loaded>),
+    Methods(Box<crate::methods::dynamics::DynamicsLab>),
+    /// The job panicked (a defect): the message, for the status line.
+    Failed(String),
+}
+
+/// Runs a job in the calling thread.
+pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
+    match req {
+        JobRequest::Model { params, level } => {
+            JobOutput::Model(Box::new(run_model(&params, level, progress)))
+        }
+        JobRequest::Study { params, setup } => {
+            JobOutput::Study(Box::new(run_study(&params, &setup, progress)))
+        }
+        JobRequest::Methods => {
+            JobOutput::Methods(Box::new(crate::panes::session::run_methods(progress)))
+        }
+        JobRequest::Load { paths } => {
+            let mut out = Vec::new();
+            for p in paths {
+                if progress.is_cancelled() {
+                    break;
+                }
+                progress.set_message(format!("opening {}", p.display()));
+                out.extend(load_path(&p, progress));
+            }
+            JobOutput::Loaded(out)
+        }
+    }
+}
+
+/// Runs jobs on threads and collects their outputs.
+pub struct Worker {
+    tx: Sender<(u64, JobOutput)>,
+    rx: Receiver<(u64, JobOutput)>,
+}
+
+impl Default for Worker {
+    fn default() -> Self {
+        let (tx, rx) = channel();
+        Self { tx, rx }
+    }
+}
+
+impl Worker {
+    /// Starts a job on a new thread. A panic inside it becomes
+    /// [`JobOutput::Failed`], never a crash of the interface.
+    pub fn spawn(&self, id: u64, req: JobRequest, progress: Arc<Progress>) {
+        let tx = self.tx.clone();
+        let spawned = std::thread::Builder::new()
+            .name(format!("pinsight-job-{id}"))
+            .spawn(move || {
+                let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    execute(req, &progress)
+                }))
+                .unwrap_or_else(|payload| {
+                    let msg = payload
+                        .downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                        .unwrap_or_else(|| "unknown panic".into());
+                    JobOutput::Failed(format!("internal error in background work: {msg}"))
+                });
+                let _ = tx.send((id, out));
+            });
+        if let Err(e) = spawned {
+            let _ = self
+                .tx
+                .send((id, JobOutput::Failed(format!("cannot start a thread: {e}"))));
+        }
+    }
+
+    /// Outputs that arrived since the last call.
+    pub fn poll(&self) -> Vec<(u64, JobOutput)> {
+        self.rx.try_iter().collect()
+    }
+}

@@ -1,0 +1,186 @@
+//! End to end: the real binary in a tmux session. Keys are sent with
+//! `send-keys`, the screen is read with `capture-pane`. Every wait has a
+//! timeout; the tmux server is private to the test and killed at the end.
+//! Skips (with a message) only when tmux is not installed (`.ci/run`
+//! installs it).
+
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+struct Tmux {
+    sock: String,
+}
+
+impl Tmux {
+    fn cmd(&self, args: &[&str]) -> Output {
+        Command::new("tmux")
+            .args(["-L", &self.sock, "-f", "/dev/null"])
+            .args(args)
+            .output()
+            .expect("running tmux")
+    }
+    fn keys(&self, keys: &[&str]) {
+        let mut a = vec!["send-keys", "-t", "e2e"];
+        a.extend_from_slice(keys);
+        let o = self.cmd(&a);
+        assert!(
+            o.status.success(),
+            "send-keys {keys:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    fn literal(&self, text: &str) {
+        let o = self.cmd(&["send-keys", "-t", "e2e", "-l", text]);
+        assert!(o.status.success());
+    }
+    fn screen(&self) -> String {
+        String::from_utf8_lossy(&self.cmd(&["capture-pane", "-p", "-t", "e2e"]).stdout).into_owned()
+    }
+    /// Waits until the screen satisfies `ok`; panics with the screen after `secs`.
+    fn wait(&self, what: &str, secs: f64, ok: impl Fn(&str) -> bool) -> String {
+        let start = Instant::now();
+        loop {
+            let s = self.screen();
+            if ok(&s) {
+                return s;
+            }
+            if start.elapsed() > Duration::from_secs_f64(secs) {
+                panic!("timed out after {secs} s waiting for {what}; screen:\n{s}");
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+    fn wait_for(&self, text: &str, secs: f64) -> String {
+        self.wait(&format!("`{text}`"), secs, |s| s.contains(text))
+    }
+    fn pane_state(&self) -> String {
+        String::from_utf8_lossy(
+            &self
+                .cmd(&[
+                    "list-panes",
+                    "-t",
+                    "e2e",
+                    "-F",
+                    "#{pane_dead} #{pane_dead_status}",
+                ])
+                .stdout,
+        )
+        .trim()
+        .to_string()
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        let _ = self.cmd(&["kill-server"]);
+    }
+}
+
+fn tmux_available() -> bool {
+    Command::new("tmux")
+        .arg("-V")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+#[test]
+fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
+    if !tmux_available() {
+        eprintln!(
+            "SKIPPED: tmux is not installed (the CI script installs it); the end-to-end TUI test did not run"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let corrupt = dir.path().join("dropped.mcap");
+    std::fs::write(&corrupt, b"\x89MCAP0\r\nthis is not a rig log").unwrap();
+    let t = Tmux {
+        sock: format!("pinsight-e2e-{}", std::process::id()),
+    };
+    let bin = env!("CARGO_BIN_EXE_pinsight");
+    let started = t.cmd(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "110",
+        "-y",
+        "32",
+        &format!("env TERM=xterm-256color {bin}"),
+    ]);
+    assert!(
+        started.status.success(),
+        "{}",
+        String::from_utf8_lossy(&started.stderr)
+    );
+    t.cmd(&["set-option", "-t", "e2e", "remain-on-exit", "on"]);
+    // `pinsight` with no argument opens the demo; wait until the terminal
+    // query is over (keys typed during it would be read as its reply).
+    t.wait("the image protocol", 10.0, |s| {
+        s.contains("1 Session") && s.contains("images:") && !s.contains("asking the terminal")
+    });
+    t.wait_for("model: clearance level", 20.0);
+    // Every pane by number, then Tab wraps around.
+    for (k, text) in [
+        ("2", "Channels"),
+        ("3", "Fidelity and figures"),
+        ("4", "Parameters — preset paper"),
+        ("5", "press r to run"),
+        ("6", "Vision"),
+        ("7", "Yield"),
+        ("8", "Methods"),
+    ] {
+        t.keys(&[k]);
+        t.wait_for(text, 10.0);
+    }
+    t.wait_for("Charts (", 30.0); // the quick methods lab ran in the background
+    t.keys(&["Tab"]);
+    t.wait_for("Metadata", 10.0);
+    // Help overlay.
+    t.keys(&["?"]);
+    t.wait_for("Help — every key", 10.0);
+    t.keys(&["Escape"]);
+    t.wait("help closed", 10.0, |s| !s.contains("Help — every key"));
+    // Edit a parameter: an invalid value first, then a valid one.
+    t.keys(&["4"]);
+    t.wait_for("Parameters — preset paper", 10.0);
+    let row = pinsight::panes::model::row_of_key("clearance_mm").unwrap();
+    for _ in 0..row {
+        t.keys(&["j"]);
+    }
+    t.keys(&["Enter", "C-u"]);
+    t.literal("abc");
+    t.keys(&["Enter"]);
+    t.wait_for("invalid value for `clearance_mm`", 10.0);
+    t.keys(&["C-u"]);
+    t.literal("0.3");
+    t.keys(&["Enter"]);
+    t.wait_for("clearance_mm = 0.3", 10.0);
+    t.wait_for("up to date", 30.0);
+    assert!(t.screen().contains("0.3"));
+    // A corrupt log opened by path: an error in the Session pane, no exit.
+    t.keys(&["o"]);
+    t.wait_for("path:", 10.0);
+    t.literal(&corrupt.display().to_string());
+    t.keys(&["Enter"]);
+    t.keys(&["1"]);
+    let s = t.wait_for("Load errors (1)", 20.0);
+    assert!(s.contains("dropped.mcap"), "{s}");
+    assert!(t.pane_state().starts_with('0'), "the TUI must still run");
+    // Quit.
+    t.keys(&["q"]);
+    let start = Instant::now();
+    loop {
+        let st = t.pane_state();
+        if st.starts_with('1') {
+            assert_eq!(st, "1 0", "exit status");
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "q did not quit: {st}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
