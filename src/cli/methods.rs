@@ -4,6 +4,7 @@ use crate::methods::Effort;
 use crate::methods::dynamics::{DynamicsLab, run_dynamics_lab, scenes_from_toml};
 use crate::plot::write_png;
 use crate::progress::{Progress, ProgressBarGuard};
+use crate::vision::lab::{LabMode, VisionLab, lab_panels, run_lab};
 use anyhow::{Context, anyhow, bail};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -36,7 +37,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     match args.lab.as_str() {
         "dynamics" => run_dynamics(&args, effort),
-        "vision" => bail!("the vision lab is not wired in yet"),
+        "vision" => run_vision(&args),
         other => Err(anyhow!("unknown lab `{other}` (allowed: dynamics, vision)")),
     }
 }
@@ -98,6 +99,132 @@ fn run_dynamics(args: &Args, effort: Effort) -> anyhow::Result<ExitCode> {
         print_summary(&mut std::io::stdout().lock(), &lab, &args.out)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn run_vision(args: &Args) -> anyhow::Result<ExitCode> {
+    if args.scenes.is_some() {
+        bail!(
+            "--scenes applies to the dynamics lab only (the vision lab generates its own exact-truth images)"
+        );
+    }
+    let mode = if args.full {
+        LabMode::Full
+    } else {
+        LabMode::Quick
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let progress = Progress::new(1);
+    let lab = {
+        let _bar = ProgressBarGuard::start(progress.clone(), "vision lab");
+        run_lab(mode, &progress)
+    };
+    let json = serde_json::to_string_pretty(&lab)?;
+    let path = args.out.join("vision.json");
+    std::fs::write(&path, &json).with_context(|| format!("writing {}", path.display()))?;
+    write_vision_tables(&args.out, &lab)?;
+    write_png(
+        &args.out.join("vision_lab.png"),
+        &lab_panels(&lab),
+        2,
+        1500,
+        1500,
+    )?;
+    if args.json {
+        println!("{json}");
+    } else {
+        print_vision_summary(&mut std::io::stdout().lock(), &lab, &args.out)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_vision_tables(dir: &Path, lab: &VisionLab) -> anyhow::Result<()> {
+    let mut w = String::from("localiser,noise_dn,rms_px,p95_px,pins,time_us_per_pin\n");
+    for r in &lab.speed_accuracy {
+        w.push_str(&format!(
+            "\"{}\",{},{},{},{},{}\n",
+            r.localiser.name(),
+            r.noise_dn,
+            csv_f(r.rms_px),
+            csv_f(r.p95_px),
+            r.pins,
+            csv_f(r.time_us_per_pin)
+        ));
+    }
+    let path = dir.join("vision_speed_accuracy.csv");
+    std::fs::write(&path, w).with_context(|| format!("writing {}", path.display()))?;
+    let mut w = String::from(
+        "factor,level,localiser,images,detection_rate,verdict_accuracy,status_accuracy,errors,rms_px\n",
+    );
+    for r in &lab.degradation {
+        w.push_str(&format!(
+            "{},{},\"{}\",{},{},{},{},{},{}\n",
+            r.factor,
+            r.level,
+            r.localiser.name(),
+            r.images,
+            csv_f(r.detection_rate),
+            csv_f(r.verdict_accuracy),
+            csv_f(r.status_accuracy),
+            r.errors,
+            r.rms_px.map(csv_f).unwrap_or_default()
+        ));
+    }
+    let path = dir.join("vision_degradation.csv");
+    std::fs::write(&path, w).with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+fn print_vision_summary<W: Write>(out: &mut W, lab: &VisionLab, dir: &Path) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "pinsight methods vision ({:?}) — part {}",
+        lab.mode, lab.part_number
+    )?;
+    writeln!(out, "speed against pin-centre error (exact truth):")?;
+    writeln!(
+        out,
+        "  {:<30} {:>8} {:>9} {:>9} {:>6} {:>10}",
+        "localiser", "noise DN", "RMS px", "p95 px", "pins", "µs/pin"
+    )?;
+    for r in &lab.speed_accuracy {
+        writeln!(
+            out,
+            "  {:<30} {:>8} {:>9.4} {:>9.4} {:>6} {:>10.2}",
+            r.localiser.name(),
+            r.noise_dn,
+            r.rms_px,
+            r.p95_px,
+            r.pins,
+            r.time_us_per_pin
+        )?;
+    }
+    writeln!(
+        out,
+        "where the pipeline breaks (verdict accuracy, detection rate):"
+    )?;
+    for r in &lab.degradation {
+        writeln!(
+            out,
+            "  {:<9} {:>6} {:<30} verdicts {:>5.1} %  detected {:>5.1} %  pin statuses {:>5.1} %{}",
+            r.factor,
+            r.level,
+            r.localiser.name(),
+            100.0 * r.verdict_accuracy,
+            100.0 * r.detection_rate,
+            100.0 * r.status_accuracy,
+            if r.errors > 0 {
+                format!("  ({} images not inspected)", r.errors)
+            } else {
+                String::new()
+            }
+        )?;
+    }
+    for n in &lab.notes {
+        writeln!(out, "note: {n}")?;
+    }
+    writeln!(out, "tables and charts in {}", dir.display())?;
+    Ok(())
 }
 
 fn csv_f(x: f64) -> String {

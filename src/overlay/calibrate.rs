@@ -27,12 +27,12 @@
 //! as they are.
 
 use super::compare::OverlayError;
-use super::predict::{noise_sigma, predict, velocity, PredictOptions, Prediction};
-use crate::model::table::Table;
+use super::predict::{PredictOptions, Prediction, noise_sigma, predict, velocity};
 use crate::model::Params;
+use crate::model::table::Table;
 use crate::progress::Progress;
-use crate::rig::cycles::{CycleSet, ValueSource};
 use crate::rig::RigLog;
+use crate::rig::cycles::{CycleSet, ValueSource};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::f64::consts::TAU;
@@ -125,7 +125,11 @@ fn curves_of(rows: &[&[f64]], n: usize) -> Curves {
     let mut var_mean = vec![f64::NAN; n];
     let mut var_spread = vec![f64::NAN; n];
     for j in 0..n {
-        let v: Vec<f64> = rows.iter().map(|r| r[j]).filter(|x| x.is_finite()).collect();
+        let v: Vec<f64> = rows
+            .iter()
+            .map(|r| r[j])
+            .filter(|x| x.is_finite())
+            .collect();
         if v.len() < 2 {
             continue;
         }
@@ -284,9 +288,26 @@ const FIT_MIN_SPEED: f64 = 0.1;
 
 /// The force objective for (standoff, τ): table values by linear least
 /// squares; returns (sum of squares, values, samples).
-fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_wd: &Table, standoff_mm: f64, tau: f64, v0: f64, v1: f64) -> (f64, Vec<f64>, usize) {
+fn force_fit(
+    cycles: &[&ForceCycle],
+    knots_mm: &[f64],
+    fixed: Option<&[f64]>,
+    f_wd: &Table,
+    standoff_mm: f64,
+    tau: f64,
+    v0: f64,
+    v1: f64,
+) -> (f64, Vec<f64>, usize) {
     let k = knots_mm.len();
-    let cd = |v: f64| if v < v0 { 0.0 } else if v > v1 { 1.0 } else { (v - v0) / (v1 - v0) };
+    let cd = |v: f64| {
+        if v < v0 {
+            0.0
+        } else if v > v1 {
+            1.0
+        } else {
+            (v - v0) / (v1 - v0)
+        }
+    };
     // Hat basis on the knots; beyond the last knot the last value holds.
     let basis = |d: f64, out: &mut [f64]| {
         out.iter_mut().for_each(|x| *x = 0.0);
@@ -314,7 +335,12 @@ fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_
         let n = c.s.len();
         let excl = (BDC_EXCLUDE_DEG / 360.0 * n as f64).round() as usize;
         let stop = (0..n / 2)
-            .find(|&j| c.s[j].is_finite() && c.s[j] - standoff_mm > -0.5 && c.v[j].is_finite() && c.v[j] < FIT_MIN_SPEED)
+            .find(|&j| {
+                c.s[j].is_finite()
+                    && c.s[j] - standoff_mm > -0.5
+                    && c.v[j].is_finite()
+                    && c.v[j] < FIT_MIN_SPEED
+            })
             .unwrap_or(n / 2);
         let mut state = vec![0.0; k];
         let mut state_wd = 0.0;
@@ -322,7 +348,11 @@ fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_
         prev.iter_mut().for_each(|x| *x = 0.0);
         for j in 0..n {
             let (s, v) = (c.s[j], c.v[j]);
-            let d = if s.is_finite() { s - standoff_mm } else { f64::NAN };
+            let d = if s.is_finite() {
+                s - standoff_mm
+            } else {
+                f64::NAN
+            };
             let mut wd = 0.0;
             if d.is_finite() && v.is_finite() {
                 if v > 0.0 {
@@ -345,7 +375,11 @@ fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_
             let y = c.f[j];
             // Samples that carry information: force expected or measured, away from BDC.
             let near_bdc = j.abs_diff(n / 2) <= excl;
-            if j < stop && !near_bdc && y.is_finite() && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5) {
+            if j < stop
+                && !near_bdc
+                && y.is_finite()
+                && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5)
+            {
                 cols.push(state.clone());
                 ys.push(y);
                 fixed_part.push(state_wd);
@@ -363,7 +397,8 @@ fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_
                     }
                 }
             }
-            let m = nalgebra::DMatrix::from_row_slice(k, k, &ata) + nalgebra::DMatrix::identity(k, k) * 1e-9;
+            let m = nalgebra::DMatrix::from_row_slice(k, k, &ata)
+                + nalgebra::DMatrix::identity(k, k) * 1e-9;
             let rhs = nalgebra::DVector::from_vec(atb.clone());
             match m.lu().solve(&rhs) {
                 Some(x) => x.iter().copied().collect(),
@@ -380,11 +415,24 @@ fn force_fit(cycles: &[&ForceCycle], knots_mm: &[f64], fixed: Option<&[f64]>, f_
 }
 
 /// Standoff and τ minimising the force objective (nested golden sections).
-fn fit_force(cycles: &[&ForceCycle], knots: &[f64], fixed: Option<&[f64]>, p: &Params, around: (f64, f64), spans: (f64, f64), iters: usize) -> (f64, f64, Vec<f64>) {
+fn fit_force(
+    cycles: &[&ForceCycle],
+    knots: &[f64],
+    fixed: Option<&[f64]>,
+    p: &Params,
+    around: (f64, f64),
+    spans: (f64, f64),
+    iters: usize,
+) -> (f64, f64, Vec<f64>) {
     let (s0, t0) = around;
     let inner = |tau: f64| {
-        let so = golden(s0 - spans.0, s0 + spans.0, iters, |so| force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0);
-        (so, force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0)
+        let so = golden(s0 - spans.0, s0 + spans.0, iters, |so| {
+            force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0
+        });
+        (
+            so,
+            force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0,
+        )
     };
     let tau = golden((t0 - spans.1).max(0.0), t0 + spans.1, iters, |t| inner(t).1);
     let (so, _) = inner(tau);
@@ -403,7 +451,13 @@ fn jackknife(values: &[f64]) -> f64 {
 }
 
 /// Calibrates `base` (the nominal parameters) against a log.
-pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOptions, progress: &Progress) -> Result<CalibrationReport, OverlayError> {
+pub fn calibrate(
+    log: &RigLog,
+    cs: &CycleSet,
+    base: &Params,
+    opts: &CalibrateOptions,
+    progress: &Progress,
+) -> Result<CalibrationReport, OverlayError> {
     let file = log.file.clone();
     let n = cs.points_per_rev;
     let mut notes = Vec::new();
@@ -411,12 +465,19 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
     if cycles.len() < 4 {
         return Err(OverlayError::NoData {
             file,
-            message: format!("calibration needs at least 4 usable cycles with a displacement signal, {} found", cycles.len()),
+            message: format!(
+                "calibration needs at least 4 usable cycles with a displacement signal, {} found",
+                cycles.len()
+            ),
         });
     }
     let gear = cs.crank.gear_ratio;
     let motor_rpm = cycles.iter().map(|c| c.crank_rpm).sum::<f64>() / cycles.len() as f64 * gear;
-    let noise = log.signals.displacement.as_ref().map_or(0.0, |s| noise_sigma(&s.values));
+    let noise = log
+        .signals
+        .displacement
+        .as_ref()
+        .map_or(0.0, |s| noise_sigma(&s.values));
 
     // 1. Predictions on the clearance grid (in parallel).
     let nominal_c = base.clearance * 1e3;
@@ -444,7 +505,9 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
     for (c, r) in grid_c.iter().zip(preds) {
         match r {
             Ok(p) => preds_ok.push((*c, p)),
-            Err(e) => notes.push(format!("the model failed at clearance {c} mm ({e}); left out of the grid")),
+            Err(e) => notes.push(format!(
+                "the model failed at clearance {c} mm ({e}); left out of the grid"
+            )),
         }
     }
     if preds_ok.len() < 3 {
@@ -488,8 +551,14 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
         .map(|(c, cu)| (*c, stroke_objective(&full_meas, cu, noise).0))
         .collect();
     // Jackknife: blocks of measured cycles, blocks of simulated revolutions.
-    let jk_meas: Vec<(f64, f64, f64)> = (0..nb.min(cycles.len())).into_par_iter().map(|b| fit_clearance(&meas_curves(Some(b)), &full_pred, noise)).collect();
-    let jk_pred: Vec<(f64, f64, f64)> = (0..nb).into_par_iter().map(|b| fit_clearance(&full_meas, &pred_curves(Some(b)), noise)).collect();
+    let jk_meas: Vec<(f64, f64, f64)> = (0..nb.min(cycles.len()))
+        .into_par_iter()
+        .map(|b| fit_clearance(&meas_curves(Some(b)), &full_pred, noise))
+        .collect();
+    let jk_pred: Vec<(f64, f64, f64)> = (0..nb)
+        .into_par_iter()
+        .map(|b| fit_clearance(&full_meas, &pred_curves(Some(b)), noise))
+        .collect();
     let combine = |f: fn(&(f64, f64, f64)) -> f64| {
         let a = jackknife(&jk_meas.iter().map(f).collect::<Vec<_>>());
         let b = jackknife(&jk_pred.iter().map(f).collect::<Vec<_>>());
@@ -499,7 +568,8 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
     let sdz = combine(|x| x.1);
     let spsi = combine(|x| x.2);
     progress.inc(1);
-    let edge = grid_c.first().is_some_and(|&lo| c_fit <= lo * 1.001) || grid_c.last().is_some_and(|&hi| c_fit >= hi * 0.999);
+    let edge = grid_c.first().is_some_and(|&lo| c_fit <= lo * 1.001)
+        || grid_c.last().is_some_and(|&hi| c_fit >= hi * 0.999);
     if edge {
         notes.push(format!("the clearance estimate {c_fit:.3} mm is at the edge of the simulated grid ({:.3}–{:.3} mm): treat it as a bound", grid_c[0], grid_c[grid_c.len() - 1]));
     }
@@ -507,10 +577,17 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
     let (_, _, _, b_spread, _) = stroke_objective(&full_meas, &before_curves, noise);
     // Before: the cycle analysis's zeros (no Δz, no phase).
     let b_mean = {
-        let r: Vec<f64> = full_meas.mean.iter().zip(&before_curves.mean).map(|(a, b)| a - b).filter(|x| x.is_finite()).collect();
+        let r: Vec<f64> = full_meas
+            .mean
+            .iter()
+            .zip(&before_curves.mean)
+            .map(|(a, b)| a - b)
+            .filter(|x| x.is_finite())
+            .collect();
         (r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64).sqrt()
     };
-    let (_, _, _, a_spread, a_mean) = stroke_objective(&full_meas, &interp_curves(&full_pred, c_fit), noise);
+    let (_, _, _, a_spread, a_mean) =
+        stroke_objective(&full_meas, &interp_curves(&full_pred, c_fit), noise);
 
     // 2. Force: standoff, F_ins, load-cell lag.
     let omega_deg = |c: &crate::rig::Cycle| TAU * c.crank_rpm / 60.0;
@@ -545,7 +622,11 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
     let nominal_so = base.standoff * 1e3;
     let knots: Vec<f64> = {
         let k: Vec<f64> = base.f_ins.to_mm().iter().map(|p| p.0).collect();
-        if k.len() >= 2 { k } else { vec![0.0, 0.2, 0.5, 1.0, 2.0] }
+        if k.len() >= 2 {
+            k
+        } else {
+            vec![0.0, 0.2, 0.5, 1.0, 2.0]
+        }
     };
     let mut fitted = base.clone();
     fitted.clearance = c_fit * 1e-3;
@@ -556,21 +637,56 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
     } else {
         let all: Vec<&ForceCycle> = fcycles.iter().collect();
         let nominal_vals: Vec<f64> = knots.iter().map(|&d| base.f_ins.eval(d * 1e-3)).collect();
-        let fixed = if opts.fit_f_ins { None } else { Some(nominal_vals.as_slice()) };
-        let (so, tau, vals) = fit_force(&all, &knots, fixed, base, (nominal_so, 200e-6), (2.0, 200e-6), 30);
+        let fixed = if opts.fit_f_ins {
+            None
+        } else {
+            Some(nominal_vals.as_slice())
+        };
+        let (so, tau, vals) = fit_force(
+            &all,
+            &knots,
+            fixed,
+            base,
+            (nominal_so, 200e-6),
+            (2.0, 200e-6),
+            30,
+        );
         let nb_f = nb.min(all.len());
         let jk: Vec<(f64, f64, Vec<f64>)> = (0..nb_f)
             .into_par_iter()
             .map(|b| {
-                let sub: Vec<&ForceCycle> = all.iter().enumerate().filter(|(i, _)| i * nb_f / all.len() != b).map(|(_, c)| *c).collect();
+                let sub: Vec<&ForceCycle> = all
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| i * nb_f / all.len() != b)
+                    .map(|(_, c)| *c)
+                    .collect();
                 fit_force(&sub, &knots, fixed, base, (so, tau), (0.3, 60e-6), 18)
             })
             .collect();
         progress.inc(1);
         let s_so = jackknife(&jk.iter().map(|x| x.0).collect::<Vec<_>>());
         let s_tau = jackknife(&jk.iter().map(|x| x.1).collect::<Vec<_>>());
-        let (ss_b, _, nb_s) = force_fit(&all, &knots, Some(&nominal_vals), &base.f_wd, nominal_so, 0.0, base.v0, base.v1);
-        let (ss_a, _, na_s) = force_fit(&all, &knots, Some(&vals), &base.f_wd, so, tau, base.v0, base.v1);
+        let (ss_b, _, nb_s) = force_fit(
+            &all,
+            &knots,
+            Some(&nominal_vals),
+            &base.f_wd,
+            nominal_so,
+            0.0,
+            base.v0,
+            base.v1,
+        );
+        let (ss_a, _, na_s) = force_fit(
+            &all,
+            &knots,
+            Some(&vals),
+            &base.f_wd,
+            so,
+            tau,
+            base.v0,
+            base.v1,
+        );
         before_force = (ss_b / nb_s.max(1) as f64).sqrt();
         after_force = (ss_a / na_s.max(1) as f64).sqrt();
         estimates.push(Estimate {
@@ -593,7 +709,11 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
         });
         fitted.standoff = so * 1e-3;
         if opts.fit_f_ins {
-            let pts: Vec<(f64, f64)> = knots.iter().zip(&vals).map(|(d, f)| (*d, f.max(0.0))).collect();
+            let pts: Vec<(f64, f64)> = knots
+                .iter()
+                .zip(&vals)
+                .map(|(d, f)| (*d, f.max(0.0)))
+                .collect();
             match Table::from_mm(&pts) {
                 Ok(t) => fitted.f_ins = t,
                 Err(e) => notes.push(format!("fitted F_ins table rejected ({e}); nominal kept")),
@@ -616,7 +736,8 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
             value: c_fit,
             sigma: sc,
             u95: 2.0 * sc,
-            method: "spread and mean of the stroke across cycles against the model's ensembles".into(),
+            method: "spread and mean of the stroke across cycles against the model's ensembles"
+                .into(),
         },
     );
     estimates.insert(
@@ -682,7 +803,10 @@ pub fn calibrate(log: &RigLog, cs: &CycleSet, base: &Params, opts: &CalibrateOpt
         cycles.len()
     );
     for e in &estimates {
-        toml.push_str(&format!("#   {} = {:.5} ± {:.5} {}\n", e.name, e.value, e.u95, e.unit));
+        toml.push_str(&format!(
+            "#   {} = {:.5} ± {:.5} {}\n",
+            e.name, e.value, e.u95, e.unit
+        ));
     }
     toml.push_str(&format!(
         "# Sensor settings for `pinsight overlay`: --meta laser_zero_mm={:.4} --laser-lag-us {:.1}{}\n",
@@ -724,7 +848,16 @@ mod tests {
         assert!((x - 1.3).abs() < 1e-9);
         // Jackknife of the mean of n blocks = the standard error of the mean.
         let v = [1.0, 2.0, 3.0, 4.0];
-        let means: Vec<f64> = (0..4).map(|i| v.iter().enumerate().filter(|(j, _)| *j != i).map(|x| x.1).sum::<f64>() / 3.0).collect();
+        let means: Vec<f64> = (0..4)
+            .map(|i| {
+                v.iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|x| x.1)
+                    .sum::<f64>()
+                    / 3.0
+            })
+            .collect();
         let se = (v.iter().map(|x| (x - 2.5f64).powi(2)).sum::<f64>() / 3.0 / 4.0).sqrt();
         assert!((jackknife(&means) - se).abs() < 1e-12);
     }
@@ -735,13 +868,19 @@ mod tests {
         let p = Params::paper();
         let n = 720;
         let dt = 0.05 / n as f64;
-        let s: Vec<f64> = (0..n).map(|j| 8.0 - 8.0 * (j as f64 * TAU / n as f64).cos()).collect();
+        let s: Vec<f64> = (0..n)
+            .map(|j| 8.0 - 8.0 * (j as f64 * TAU / n as f64).cos())
+            .collect();
         let v = velocity(&s, TAU * 20.0);
         let tau = 150e-6;
         let mut f: Vec<f64> = (0..n)
             .map(|j| {
                 let d = s[j] - 13.8;
-                if v[j] > 0.0 && d > 0.0 { p.f_ins.eval(d * 1e-3) } else { 0.0 }
+                if v[j] > 0.0 && d > 0.0 {
+                    p.f_ins.eval(d * 1e-3)
+                } else {
+                    0.0
+                }
             })
             .collect();
         super::super::predict::lag_filter(&mut f, dt, tau);
@@ -750,6 +889,9 @@ mod tests {
         let (so, t, vals) = fit_force(&[&c], &knots, None, &p, (14.0, 200e-6), (1.0, 200e-6), 50);
         assert!((so - 13.8).abs() < 0.01, "{so}");
         assert!((t - tau).abs() < 10e-6, "{t}");
-        assert!((vals[2] - 21.0).abs() < 0.5 && (vals[3] - 23.0).abs() < 0.5, "{vals:?}");
+        assert!(
+            (vals[2] - 21.0).abs() < 0.5 && (vals[3] - 23.0).abs() < 0.5,
+            "{vals:?}"
+        );
     }
 }

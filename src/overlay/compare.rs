@@ -19,12 +19,14 @@
 //! resolve on this head), the cycles are grouped in bins of that relative
 //! width and each group is compared with a prediction at its own mean speed.
 
-use super::predict::{noise_sigma, predict, CycleFigures, PredictOptions, Prediction, FIGURE_NAMES};
+use super::predict::{
+    CycleFigures, FIGURE_NAMES, PredictOptions, Prediction, noise_sigma, predict,
+};
 use crate::model::kinematics::Geometry;
 use crate::model::{ParamError, Params};
 use crate::progress::Progress;
-use crate::rig::cycles::{Band, CycleSet, OffsetEstimate, ValueSource};
 use crate::rig::RigLog;
+use crate::rig::cycles::{Band, CycleSet, OffsetEstimate, ValueSource};
 use crate::sim::SimError;
 use serde::Serialize;
 use std::f64::consts::TAU;
@@ -68,7 +70,11 @@ pub enum OverlayError {
 /// The model parameters for a log: the given parameter file (or the `paper`
 /// preset plus the log's `rig` metadata: clearance, standoff, material,
 /// gear ratio), then `--set` overrides. Returns the notes saying what came from where.
-pub fn model_params(log: &RigLog, file: Option<Params>, sets: &[String]) -> Result<(Params, Vec<String>), ParamError> {
+pub fn model_params(
+    log: &RigLog,
+    file: Option<Params>,
+    sets: &[String],
+) -> Result<(Params, Vec<String>), ParamError> {
     let mut notes = Vec::new();
     let mut p = match file {
         Some(p) => {
@@ -88,7 +94,11 @@ pub fn model_params(log: &RigLog, file: Option<Params>, sets: &[String]) -> Resu
             }
             notes.push(format!(
                 "model parameters: preset paper + the log's metadata ({})",
-                if used.is_empty() { "nothing usable".to_string() } else { used.join(", ") }
+                if used.is_empty() {
+                    "nothing usable".to_string()
+                } else {
+                    used.join(", ")
+                }
             ));
             p
         }
@@ -116,10 +126,20 @@ impl Stats {
         let v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
         let n = v.len();
         if n == 0 {
-            return Stats { n: 0, mean: f64::NAN, std: f64::NAN, min: f64::NAN, max: f64::NAN };
+            return Stats {
+                n: 0,
+                mean: f64::NAN,
+                std: f64::NAN,
+                min: f64::NAN,
+                max: f64::NAN,
+            };
         }
         let mean = v.iter().sum::<f64>() / n as f64;
-        let std = if n > 1 { (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
+        let std = if n > 1 {
+            (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+        } else {
+            0.0
+        };
         Stats {
             n,
             mean,
@@ -232,7 +252,11 @@ fn rms(v: &[f64]) -> f64 {
 }
 
 fn max_abs(v: &[f64]) -> f64 {
-    v.iter().copied().filter(|x| x.is_finite()).map(f64::abs).fold(f64::NAN, f64::max)
+    v.iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .map(f64::abs)
+        .fold(f64::NAN, f64::max)
 }
 
 /// Counts of grid samples inside the min–max band widened by ±2σ_noise and
@@ -266,7 +290,12 @@ fn frac(a: usize, n: usize) -> f64 {
 /// Groups cycle speeds: one group when their relative spread ≤ threshold,
 /// else bins of relative width `threshold`. Returns (group mean speed, member indices).
 pub fn speed_groups(speeds: &[f64], threshold: f64) -> Vec<(f64, Vec<usize>)> {
-    let fin: Vec<(usize, f64)> = speeds.iter().copied().enumerate().filter(|(_, s)| s.is_finite() && *s > 0.0).collect();
+    let fin: Vec<(usize, f64)> = speeds
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|(_, s)| s.is_finite() && *s > 0.0)
+        .collect();
     if fin.is_empty() {
         return Vec::new();
     }
@@ -282,7 +311,12 @@ pub fn speed_groups(speeds: &[f64], threshold: f64) -> Vec<(f64, Vec<usize>)> {
         bins.entry(k).or_default().push(i);
     }
     bins.into_values()
-        .map(|m| (m.iter().map(|&i| speeds[i]).sum::<f64>() / m.len() as f64, m))
+        .map(|m| {
+            (
+                m.iter().map(|&i| speeds[i]).sum::<f64>() / m.len() as f64,
+                m,
+            )
+        })
         .collect()
 }
 
@@ -308,7 +342,8 @@ pub fn overlay(
             file,
             message: format!(
                 "no usable cycle with a displacement signal{} ({} cycles found)",
-                opts.cycles.map_or(String::new(), |(a, b)| format!(" in {a}..{b}")),
+                opts.cycles
+                    .map_or(String::new(), |(a, b)| format!(" in {a}..{b}")),
                 cs.cycles.len()
             ),
         });
@@ -349,7 +384,11 @@ pub fn overlay(
     let mut lz = cs.offsets.laser_zero_mm.clone();
     let mut shift = 0.0;
     if lz.source == ValueSource::Estimated {
-        let off_part: Vec<bool> = cs.ideal_stroke_mm.iter().map(|&s| s < params.standoff * 1e3 - 1.0).collect();
+        let off_part: Vec<bool> = cs
+            .ideal_stroke_mm
+            .iter()
+            .map(|&s| s < params.standoff * 1e3 - 1.0)
+            .collect();
         let mut acc = Vec::new();
         for (i, c) in selected.iter().enumerate() {
             let pm = &groups[group_of[i]].prediction.stroke.mean;
@@ -373,11 +412,20 @@ pub fn overlay(
             ));
         }
     }
-    let stroke_of = |c: &crate::rig::Cycle| -> Vec<f64> { c.stroke_mm.iter().map(|s| s + shift).collect() };
+    let stroke_of =
+        |c: &crate::rig::Cycle| -> Vec<f64> { c.stroke_mm.iter().map(|s| s + shift).collect() };
 
     // Sensor noise (white), from the raw samples.
-    let noise_s = log.signals.displacement.as_ref().map_or(0.0, |s| noise_sigma(&s.values));
-    let noise_f = log.signals.force.as_ref().map_or(0.0, |s| noise_sigma(&s.values));
+    let noise_s = log
+        .signals
+        .displacement
+        .as_ref()
+        .map_or(0.0, |s| noise_sigma(&s.values));
+    let noise_f = log
+        .signals
+        .force
+        .as_ref()
+        .map_or(0.0, |s| noise_sigma(&s.values));
     notes.push(format!(
         "sensor noise estimated from the raw samples: displacement {:.4} mm, force {:.4} N (added to the predicted bands and figures)",
         noise_s, noise_f
@@ -399,7 +447,11 @@ pub fn overlay(
         let rf: Vec<f64> = if c.force_n.is_empty() {
             Vec::new()
         } else {
-            c.force_n.iter().zip(&pr.force.mean).map(|(a, b)| a - b).collect()
+            c.force_n
+                .iter()
+                .zip(&pr.force.mean)
+                .map(|(a, b)| a - b)
+                .collect()
         };
         all_sr.extend(r.iter().copied());
         all_fr.extend(rf.iter().copied());
@@ -407,14 +459,22 @@ pub fn overlay(
         ns += a;
         sb += b1;
         s2 += b2;
-        let (fa, fb1, fb2) = if c.force_n.is_empty() { (0, 0, 0) } else { inside(&c.force_n, &pr.force, noise_f) };
+        let (fa, fb1, fb2) = if c.force_n.is_empty() {
+            (0, 0, 0)
+        } else {
+            inside(&c.force_n, &pr.force, noise_f)
+        };
         nf += fa;
         fb += fb1;
         f2 += fb2;
         let omega = TAU * c.crank_rpm / 60.0;
         let (ideal_s, ideal_v) = super::predict::ideal_curves(&geom, n, omega);
         let empty = vec![f64::NAN; n];
-        let force = if c.force_n.is_empty() { &empty } else { &c.force_n };
+        let force = if c.force_n.is_empty() {
+            &empty
+        } else {
+            &c.force_n
+        };
         rows.push(CycleResidual {
             index: c.index,
             t_start_ns: c.t_start_ns,
@@ -436,11 +496,37 @@ pub fn overlay(
     // Bands and mean-curve residuals.
     let strokes: Vec<Vec<f64>> = selected.iter().map(|c| stroke_of(c)).collect();
     let measured_stroke = Band::of(strokes.iter().map(Vec::as_slice), n);
-    let measured_force = Band::of(selected.iter().map(|c| c.force_n.as_slice()).filter(|f| !f.is_empty()), n);
-    let predicted_stroke = Band::of(groups.iter().flat_map(|g| g.prediction.stroke_revs.iter().map(Vec::as_slice)), n);
-    let predicted_force = Band::of(groups.iter().flat_map(|g| g.prediction.force_revs.iter().map(Vec::as_slice)), n);
-    let residual_stroke_mm: Vec<f64> = measured_stroke.mean.iter().zip(&predicted_stroke.mean).map(|(a, b)| a - b).collect();
-    let residual_force_n: Vec<f64> = measured_force.mean.iter().zip(&predicted_force.mean).map(|(a, b)| a - b).collect();
+    let measured_force = Band::of(
+        selected
+            .iter()
+            .map(|c| c.force_n.as_slice())
+            .filter(|f| !f.is_empty()),
+        n,
+    );
+    let predicted_stroke = Band::of(
+        groups
+            .iter()
+            .flat_map(|g| g.prediction.stroke_revs.iter().map(Vec::as_slice)),
+        n,
+    );
+    let predicted_force = Band::of(
+        groups
+            .iter()
+            .flat_map(|g| g.prediction.force_revs.iter().map(Vec::as_slice)),
+        n,
+    );
+    let residual_stroke_mm: Vec<f64> = measured_stroke
+        .mean
+        .iter()
+        .zip(&predicted_stroke.mean)
+        .map(|(a, b)| a - b)
+        .collect();
+    let residual_force_n: Vec<f64> = measured_force
+        .mean
+        .iter()
+        .zip(&predicted_force.mean)
+        .map(|(a, b)| a - b)
+        .collect();
     let run = RunResiduals {
         cycles: rows.len(),
         stroke_mean_rms_mm: rms(&residual_stroke_mm),
@@ -459,14 +545,22 @@ pub fn overlay(
     let pred_figs: Vec<CycleFigures> = groups
         .iter()
         .enumerate()
-        .flat_map(|(k, g)| g.prediction.figures_with_noise(noise_s, noise_f, 7 + k as u64))
+        .flat_map(|(k, g)| {
+            g.prediction
+                .figures_with_noise(noise_s, noise_f, 7 + k as u64)
+        })
         .collect();
     let figures = FIGURE_NAMES
         .iter()
         .enumerate()
         .filter(|(k, _)| !(log.signals.force.is_none() && *k == 3))
         .map(|(k, (name, unit))| {
-            let m = Stats::of(&rows.iter().map(|r| r.measured.values()[k]).collect::<Vec<_>>());
+            let m = Stats::of(
+                &rows
+                    .iter()
+                    .map(|r| r.measured.values()[k])
+                    .collect::<Vec<_>>(),
+            );
             let p = Stats::of(&pred_figs.iter().map(|f| f.values()[k]).collect::<Vec<_>>());
             let se = (m.std.powi(2) / m.n.max(1) as f64 + p.std.powi(2) / p.n.max(1) as f64).sqrt();
             let d = m.mean - p.mean;

@@ -15,11 +15,11 @@
 //! speed-deviation figure is differentiated from the (lagged) stroke exactly
 //! as it is from the measured one.
 
-use crate::model::kinematics::Geometry;
 use crate::model::Params;
+use crate::model::kinematics::Geometry;
 use crate::progress::Progress;
 use crate::rig::cycles::Band;
-use crate::sim::{simulate, Level, SimError, SimOptions};
+use crate::sim::{Level, SimError, SimOptions, simulate};
 use serde::Serialize;
 use std::f64::consts::TAU;
 
@@ -108,16 +108,44 @@ impl CycleFigures {
 
     /// Figures of a cycle on the grid: stroke and force (NaN = no data),
     /// ideal stroke and velocity, crank speed ω (rad/s), standoff (mm).
-    pub fn of(stroke: &[f64], force: &[f64], ideal: &[f64], ideal_vel: &[f64], omega: f64, standoff_mm: f64) -> Self {
+    pub fn of(
+        stroke: &[f64],
+        force: &[f64],
+        ideal: &[f64],
+        ideal_vel: &[f64],
+        omega: f64,
+        standoff_mm: f64,
+    ) -> Self {
         let n = stroke.len();
-        let fin = |v: &[f64]| v.iter().copied().filter(|x| x.is_finite()).collect::<Vec<f64>>();
+        let fin = |v: &[f64]| {
+            v.iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .collect::<Vec<f64>>()
+        };
         let s = fin(stroke);
         let smax = s.iter().copied().fold(f64::NAN, f64::max);
         let smin = s.iter().copied().fold(f64::NAN, f64::min);
-        let dev: Vec<f64> = stroke.iter().zip(ideal).map(|(a, b)| a - b).filter(|x| x.is_finite()).collect();
+        let dev: Vec<f64> = stroke
+            .iter()
+            .zip(ideal)
+            .map(|(a, b)| a - b)
+            .filter(|x| x.is_finite())
+            .collect();
         let vel = velocity(stroke, omega);
-        let vdev: Vec<f64> = vel.iter().zip(ideal_vel).map(|(a, b)| (a - b).abs()).filter(|x| x.is_finite()).collect();
-        let mean = |v: &[f64]| if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 };
+        let vdev: Vec<f64> = vel
+            .iter()
+            .zip(ideal_vel)
+            .map(|(a, b)| (a - b).abs())
+            .filter(|x| x.is_finite())
+            .collect();
+        let mean = |v: &[f64]| {
+            if v.is_empty() {
+                f64::NAN
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            }
+        };
         CycleFigures {
             depth_mm: smax - standoff_mm,
             stroke_max_mm: smax,
@@ -231,16 +259,31 @@ impl Prediction {
     /// added to the stroke (mm) and force (N) first — so that max/min-type
     /// figures are compared with measured ones on equal terms (noise raises
     /// a maximum by ~2–3σ). Deterministic (seeded).
-    pub fn figures_with_noise(&self, sigma_stroke_mm: f64, sigma_force_n: f64, seed: u64) -> Vec<CycleFigures> {
+    pub fn figures_with_noise(
+        &self,
+        sigma_stroke_mm: f64,
+        sigma_force_n: f64,
+        seed: u64,
+    ) -> Vec<CycleFigures> {
         let mut rng = crate::rig::synth::Rng::new(seed);
         let omega = TAU * self.motor_rpm / 60.0 / self.gear_ratio;
         self.stroke_revs
             .iter()
             .zip(&self.force_revs)
             .map(|(s, f)| {
-                let sn: Vec<f64> = s.iter().map(|x| x + sigma_stroke_mm * rng.normal()).collect();
+                let sn: Vec<f64> = s
+                    .iter()
+                    .map(|x| x + sigma_stroke_mm * rng.normal())
+                    .collect();
                 let fnz: Vec<f64> = f.iter().map(|x| x + sigma_force_n * rng.normal()).collect();
-                CycleFigures::of(&sn, &fnz, &self.ideal_stroke_mm, &self.ideal_vel_mps, omega, self.standoff_mm)
+                CycleFigures::of(
+                    &sn,
+                    &fnz,
+                    &self.ideal_stroke_mm,
+                    &self.ideal_vel_mps,
+                    omega,
+                    self.standoff_mm,
+                )
             })
             .collect()
     }
@@ -270,14 +313,23 @@ pub fn noise_sigma(values: &[f64]) -> f64 {
 }
 
 /// Runs the model at `motor_rpm` and builds the ensemble on the grid.
-pub fn predict(p: &Params, motor_rpm: f64, opts: &PredictOptions, progress: &Progress) -> Result<Prediction, SimError> {
+pub fn predict(
+    p: &Params,
+    motor_rpm: f64,
+    opts: &PredictOptions,
+    progress: &Progress,
+) -> Result<Prediction, SimError> {
     let started = std::time::Instant::now();
     let mut p = p.clone();
     p.motor_rpm = motor_rpm;
     let n = opts.points_per_rev.max(8);
     let deterministic = opts.level != Level::Clearance || p.clearance == 0.0;
     // Whole revolutions from TDC: the grid then starts at TDC (θ0 = TDC).
-    let warmup = if deterministic { 0.0 } else { opts.warmup.max(0.0).ceil() };
+    let warmup = if deterministic {
+        0.0
+    } else {
+        opts.warmup.max(0.0).ceil()
+    };
     let revs = if deterministic { 1 } else { opts.revs.max(2) };
     let so = SimOptions {
         level: opts.level,
@@ -293,7 +345,11 @@ pub fn predict(p: &Params, motor_rpm: f64, opts: &PredictOptions, progress: &Pro
     let omega = p.omega();
     let dt = TAU / omega / n as f64;
     let mut stroke = curves.stroke_mm.clone();
-    let mut force: Vec<f64> = curves.process_force_n.iter().map(|f| if f.is_finite() { *f } else { 0.0 }).collect();
+    let mut force: Vec<f64> = curves
+        .process_force_n
+        .iter()
+        .map(|f| if f.is_finite() { *f } else { 0.0 })
+        .collect();
     if opts.level == Level::Kinematic {
         notes.push("kinematic level: no forces are predicted (force shown as 0)".into());
     }
@@ -301,9 +357,20 @@ pub fn predict(p: &Params, motor_rpm: f64, opts: &PredictOptions, progress: &Pro
     lag_filter(&mut force, dt, opts.force_lag_s);
     // A deterministic prediction is periodic: filter a second turn so the lag starts settled.
     if deterministic && (opts.laser_lag_s > 0.0 || opts.force_lag_s > 0.0) && stroke.len() >= n {
-        let mut s2: Vec<f64> = curves.stroke_mm[..n].iter().chain(curves.stroke_mm[..n].iter()).copied().collect();
-        let mut f2: Vec<f64> = force[..n].iter().chain(force[..n].iter()).copied().collect();
-        let f0: Vec<f64> = curves.process_force_n[..n].iter().map(|f| if f.is_finite() { *f } else { 0.0 }).collect();
+        let mut s2: Vec<f64> = curves.stroke_mm[..n]
+            .iter()
+            .chain(curves.stroke_mm[..n].iter())
+            .copied()
+            .collect();
+        let mut f2: Vec<f64> = force[..n]
+            .iter()
+            .chain(force[..n].iter())
+            .copied()
+            .collect();
+        let f0: Vec<f64> = curves.process_force_n[..n]
+            .iter()
+            .map(|f| if f.is_finite() { *f } else { 0.0 })
+            .collect();
         f2[..n].copy_from_slice(&f0);
         f2[n..].copy_from_slice(&f0);
         lag_filter(&mut s2, dt, opts.laser_lag_s);
@@ -313,8 +380,16 @@ pub fn predict(p: &Params, motor_rpm: f64, opts: &PredictOptions, progress: &Pro
     }
     let geom = Geometry::of(&p);
     let (ideal_s, ideal_v) = ideal_curves(&geom, n, omega);
-    let stroke_revs: Vec<Vec<f64>> = stroke.chunks(n).filter(|c| c.len() == n).map(<[f64]>::to_vec).collect();
-    let force_revs: Vec<Vec<f64>> = force.chunks(n).filter(|c| c.len() == n).map(<[f64]>::to_vec).collect();
+    let stroke_revs: Vec<Vec<f64>> = stroke
+        .chunks(n)
+        .filter(|c| c.len() == n)
+        .map(<[f64]>::to_vec)
+        .collect();
+    let force_revs: Vec<Vec<f64>> = force
+        .chunks(n)
+        .filter(|c| c.len() == n)
+        .map(<[f64]>::to_vec)
+        .collect();
     let standoff_mm = p.standoff * 1e3;
     let figures: Vec<CycleFigures> = stroke_revs
         .iter()
@@ -367,7 +442,9 @@ mod tests {
     #[test]
     fn noise_level_of_a_noisy_sine() {
         let mut rng = crate::rig::synth::Rng::new(5);
-        let x: Vec<f64> = (0..50_000).map(|i| (i as f64 * 0.01).sin() * 10.0 + 0.05 * rng.normal()).collect();
+        let x: Vec<f64> = (0..50_000)
+            .map(|i| (i as f64 * 0.01).sin() * 10.0 + 0.05 * rng.normal())
+            .collect();
         let s = noise_sigma(&x);
         assert!((s - 0.05).abs() < 0.003, "{s}");
     }
@@ -393,7 +470,10 @@ mod tests {
     #[test]
     fn clearance_prediction_spreads_with_the_clearance() {
         let mut p = Params::paper();
-        let o = PredictOptions { revs: 12, ..PredictOptions::default() };
+        let o = PredictOptions {
+            revs: 12,
+            ..PredictOptions::default()
+        };
         p.clearance = 0.1e-3;
         let a = predict(&p, 1200.0, &o, &Progress::hidden()).unwrap();
         p.clearance = 0.5e-3;

@@ -209,10 +209,7 @@ fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme) {
         kv_line(
             "cycle",
             match v.cycle_at_cursor {
-                Some(k) => format!(
-                    "{k} ({}/{} in view)",
-                    v.cycles_in_view, v.cycles_total
-                ),
+                Some(k) => format!("{k} ({}/{} in view)", v.cycles_in_view, v.cycles_total),
                 None => format!("– ({} starts)", v.cycles_total),
             },
             theme,
