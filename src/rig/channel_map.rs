@@ -180,7 +180,7 @@ impl Default for ChannelMap {
                 "mm",
             )),
             cycle: Some(SignalSource::new("/rig/cycle", "index", "")),
-            images: Some("/camera/connector".into()),
+            images: Some(super::images::CAMERA_TOPIC.into()),
         }
     }
 }

@@ -18,6 +18,9 @@ use serde::Serialize;
 use std::path::Path;
 use std::sync::Arc;
 
+/// The camera topic of rig-log.md (the default channel map's `images`).
+pub const CAMERA_TOPIC: &str = "/camera/connector";
+
 /// One decoded image.
 #[derive(Debug, Clone, Serialize)]
 pub struct LogImage {

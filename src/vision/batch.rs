@@ -6,11 +6,12 @@
 
 use super::error::{ErrorKind, VisionError};
 use super::gray::Gray;
-use super::log_images;
 use super::recipe::Recipe;
 use super::result::{Inspection, Verdict};
 use super::{InspectOptions, image_io, inspect_gray};
 use crate::progress::Progress;
+use crate::rig::images::CAMERA_TOPIC;
+use crate::rig::report::Severity;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -164,13 +165,27 @@ fn add_file(path: &Path, items: &mut Vec<Item>, errors: &mut Vec<ItemResult>) {
         });
         return;
     }
-    match log_images::read_log_images(path) {
-        Err(msg) => errors.push(ItemResult::from_error(
+    // The rig module's loader: crash-proof on corrupt files, recovers the
+    // images before a truncation and reports what it could not read.
+    match crate::rig::images::read_images_with_report(path) {
+        Err(e) => errors.push(ItemResult::from_error(
             name,
             ItemMeta::default(),
-            &VisionError::Io(msg),
+            &VisionError::Io(e.to_string()),
         )),
         Ok(log) => {
+            let problems: Vec<String> = log
+                .findings
+                .iter()
+                .filter(|f| {
+                    f.severity >= Severity::DataLoss
+                        || f.channel
+                            .as_deref()
+                            .is_some_and(|c| c.starts_with(CAMERA_TOPIC))
+                })
+                .filter(|f| f.severity >= Severity::Warning)
+                .map(|f| f.message.clone())
+                .collect();
             let base = ItemMeta {
                 lot: log.meta.lot.clone(),
                 part_number: log.meta.part_number.clone(),
@@ -181,22 +196,22 @@ fn add_file(path: &Path, items: &mut Vec<Item>, errors: &mut Vec<ItemResult>) {
                 log: Some(name.clone()),
             };
             if log.images.is_empty() {
-                let why = if log.problems.is_empty() {
-                    "no images on /camera/connector".to_string()
+                let why = if problems.is_empty() {
+                    format!("no images on {CAMERA_TOPIC}")
                 } else {
-                    log.problems.join("; ")
+                    problems.join("; ")
                 };
                 errors.push(ItemResult::from_error(
                     name.clone(),
                     base.clone(),
                     &VisionError::Io(why),
                 ));
-            } else if !log.problems.is_empty() {
+            } else if !problems.is_empty() {
                 // The images read are kept; what could not be read is listed.
                 errors.push(ItemResult::from_error(
                     format!("{name} (rest of log)"),
                     base.clone(),
-                    &VisionError::Io(log.problems.join("; ")),
+                    &VisionError::Io(problems.join("; ")),
                 ));
             }
             for (i, img) in log.images.into_iter().enumerate() {

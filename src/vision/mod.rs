@@ -36,7 +36,6 @@ pub mod grid;
 pub mod image_io;
 pub mod lab;
 pub mod label;
-pub mod log_images;
 pub mod measure;
 pub mod morph;
 pub mod overlay;
