@@ -269,10 +269,13 @@ fn degrade(
     out
 }
 
+/// A degradation axis and its levels.
+type Axis = (&'static str, Vec<f64>);
+
 /// Runs the lab. Cancelling `progress` returns what was measured so far.
 pub fn run_lab(mode: LabMode, progress: &Progress) -> VisionLab {
     let r = lab_recipe();
-    let (scenes, noises, deg): (u64, Vec<f64>, Vec<(&str, Vec<f64>)>) = match mode {
+    let (scenes, noises, deg): (u64, Vec<f64>, Vec<Axis>) = match mode {
         LabMode::Quick => (
             2,
             vec![0.0, 8.0, 24.0],
