@@ -96,5 +96,10 @@ fn study(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, window, protocol, study);
+criterion_group! {
+    name = benches;
+    // No plots: criterion's plotters backend needs system fonts (pitfalls.md).
+    config = Criterion::default().without_plots();
+    targets = window, protocol, study
+}
 criterion_main!(benches);
