@@ -249,16 +249,44 @@ impl RecipeBook {
         }
     }
 
-    /// Loads recipe files; invalid ones are kept as messages.
+    /// Loads recipe files; invalid ones are kept as messages. A folder
+    /// stands for every `*.toml` file in it (sorted by name, not recursive),
+    /// so a line's recipe folder can be given as one argument.
     pub fn load(paths: &[PathBuf]) -> RecipeBook {
         let mut b = RecipeBook::default();
         for p in paths {
-            match Recipe::load(p) {
-                Ok(r) => b.recipes.push(r),
-                Err(e) => b.invalid.push(e.to_string()),
+            if p.is_dir() {
+                match std::fs::read_dir(p) {
+                    Err(e) => b
+                        .invalid
+                        .push(format!("recipe folder {}: {e}", p.display())),
+                    Ok(rd) => {
+                        let mut files: Vec<PathBuf> = rd
+                            .filter_map(|e| e.ok().map(|e| e.path()))
+                            .filter(|f| f.is_file() && ext_of(f) == "toml")
+                            .collect();
+                        files.sort();
+                        if files.is_empty() {
+                            b.invalid
+                                .push(format!("recipe folder {}: no .toml files", p.display()));
+                        }
+                        for f in files {
+                            b.push_file(&f);
+                        }
+                    }
+                }
+            } else {
+                b.push_file(p);
             }
         }
         b
+    }
+
+    fn push_file(&mut self, p: &Path) {
+        match Recipe::load(p) {
+            Ok(r) => self.recipes.push(r),
+            Err(e) => self.invalid.push(e.to_string()),
+        }
     }
 
     /// The recipe for an item: by the part number its log names, or the only
@@ -477,6 +505,27 @@ mod tests {
         assert_eq!(errors.len(), 1);
         assert_eq!(errors[0].status, ItemStatus::Error);
         assert!(errors[0].name.contains("/no/such/dir"));
+    }
+
+    #[test]
+    fn a_recipe_folder_loads_every_recipe_in_it() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/interop/images");
+        let book = RecipeBook::load(&[dir.clone()]);
+        let n = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().path().extension() == Some("toml".as_ref()))
+            .count();
+        assert!(n >= 7);
+        assert_eq!(book.recipes.len(), n, "{:?}", book.invalid);
+        assert!(book.invalid.is_empty());
+        let empty = tempfile::tempdir().unwrap();
+        let book = RecipeBook::load(&[empty.path().to_path_buf()]);
+        assert!(book.recipes.is_empty());
+        assert!(
+            book.invalid[0].contains("no .toml files"),
+            "{:?}",
+            book.invalid
+        );
     }
 
     #[test]

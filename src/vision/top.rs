@@ -411,6 +411,18 @@ pub fn inspect_top<P: Px>(
             msg: "cannot estimate mm_per_px from fewer than two pins".into(),
         });
     }
+    // Most pins off the recipe's grid: the robust fit's scale grows with
+    // them and its RMS becomes a sizeable part of the pitch (real parts on
+    // the interop set stay below 0.4 px, < 1 % of the pitch). It is still a
+    // failed connector (counting it as an error would hide a crushed part
+    // from the yield), but the reason is worth saying.
+    let pitch_px = (if recipe.cols > 1 { px_mm } else { py_mm }) * sim.s;
+    if rms.is_finite() && rms > 0.05 * pitch_px {
+        warnings.push(format!(
+            "the pins do not sit on the recipe's grid (fit RMS {rms:.1} px = {:.0} % of the pitch): a different part, or a crushed one?",
+            100.0 * rms / pitch_px
+        ));
+    }
     let mm_per_px = 1.0 / sim.s;
     if fixed.is_none() {
         warnings.push(format!(
