@@ -189,11 +189,23 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             write!(out, "{}", text_report(r))?;
         }
     }
+    let mut used_names = std::collections::HashSet::new();
     for item in &items {
         let (r, gray) = batch::inspect_item(item, &book, &opts, args.out.is_some());
         if let (Some(dir), Some(g), Some(ins)) = (&args.out, gray.as_ref(), r.inspection.as_ref()) {
             let img = draw_overlay(g, ins, &ov);
-            let path = dir.join(overlay_name(&r.name));
+            // Two inputs with the same stem (a/x.png, b/x.png, x.jpg) must
+            // not overwrite each other's overlay.
+            let mut name = overlay_name(&r.name);
+            let mut k = 2;
+            while !used_names.insert(name.clone()) {
+                name = format!(
+                    "{}-{k}.overlay.png",
+                    overlay_name(&r.name).trim_end_matches(".overlay.png")
+                );
+                k += 1;
+            }
+            let path = dir.join(name);
             img.save(&path)
                 .with_context(|| format!("cannot write {}", path.display()))?;
         }

@@ -61,6 +61,26 @@ pub enum ErrorKind {
     Cancelled,
 }
 
+impl ErrorKind {
+    /// The snake_case name, as in JSON (CSV and Markdown use the same).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ErrorKind::Io => "io",
+            ErrorKind::Empty => "empty",
+            ErrorKind::NotImage => "not_image",
+            ErrorKind::TooLarge => "too_large",
+            ErrorKind::TooSmall => "too_small",
+            ErrorKind::Decode => "decode",
+            ErrorKind::NoContrast => "no_contrast",
+            ErrorKind::WrongPart => "wrong_part",
+            ErrorKind::NoPins => "no_pins",
+            ErrorKind::NoHousing => "no_housing",
+            ErrorKind::Recipe => "recipe",
+            ErrorKind::Cancelled => "cancelled",
+        }
+    }
+}
+
 impl VisionError {
     pub fn kind(&self) -> ErrorKind {
         match self {
@@ -76,6 +96,34 @@ impl VisionError {
             VisionError::NoHousing(_) => ErrorKind::NoHousing,
             VisionError::Recipe(_) => ErrorKind::Recipe,
             VisionError::Cancelled => ErrorKind::Cancelled,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kind_names_agree_with_json() {
+        for k in [
+            ErrorKind::Io,
+            ErrorKind::Empty,
+            ErrorKind::NotImage,
+            ErrorKind::TooLarge,
+            ErrorKind::TooSmall,
+            ErrorKind::Decode,
+            ErrorKind::NoContrast,
+            ErrorKind::WrongPart,
+            ErrorKind::NoPins,
+            ErrorKind::NoHousing,
+            ErrorKind::Recipe,
+            ErrorKind::Cancelled,
+        ] {
+            assert_eq!(
+                serde_json::to_string(&k).unwrap(),
+                format!("\"{}\"", k.as_str())
+            );
         }
     }
 }

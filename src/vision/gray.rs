@@ -135,11 +135,19 @@ impl Gray {
         }
     }
 
-    /// Full-scale value of the storage type (255 or 65535).
+    /// Full-scale value of the data: 255 for 8-bit data; for 16-bit
+    /// containers the smallest 2^k − 1 (k ≥ 8) holding the largest sample,
+    /// so 10-, 12- and 14-bit cameras' data stored in 16 bits is judged
+    /// against its own range (a 12-bit image would otherwise look 16 times
+    /// flatter than it is to the contrast check).
     pub fn full_scale(&self) -> f32 {
-        match self.data {
+        match &self.data {
             GrayData::U8(_) => 255.0,
-            GrayData::U16(_) => 65535.0,
+            GrayData::U16(d) => {
+                let max = d.iter().copied().max().unwrap_or(0);
+                let bits = (16 - max.leading_zeros()).max(8);
+                ((1u32 << bits) - 1) as f32
+            }
         }
     }
 
@@ -246,6 +254,19 @@ impl Coarse {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn full_scale_follows_the_significant_bits_of_16_bit_data() {
+        let g = |v: Vec<u16>| Gray {
+            width: v.len() as u32,
+            height: 1,
+            data: GrayData::U16(v),
+        };
+        assert_eq!(g(vec![0, 4095]).full_scale(), 4095.0);
+        assert_eq!(g(vec![0, 1000]).full_scale(), 1023.0);
+        assert_eq!(g(vec![0, 40000]).full_scale(), 65535.0);
+        assert_eq!(g(vec![3, 7]).full_scale(), 255.0);
+    }
 
     #[test]
     fn coarse_block_means_and_centres() {

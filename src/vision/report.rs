@@ -580,9 +580,9 @@ impl YieldReport {
             for e in &self.error_list {
                 let _ = writeln!(
                     s,
-                    "| {} | {:?} | {} |",
+                    "| {} | {} | {} |",
                     e.name.replace('|', "\\|"),
-                    e.kind,
+                    e.kind.as_str(),
                     e.message.replace('|', "\\|")
                 );
             }
@@ -640,10 +640,7 @@ pub fn items_csv(results: &[ItemResult]) -> String {
             opt(c.map(|c| c.short)),
             opt(c.map(|c| c.high)),
             opt(r.inspection.as_ref().map(|i| i.extras.len())),
-            opt(r
-                .error
-                .as_ref()
-                .map(|e| format!("{:?}", e.kind).to_lowercase())),
+            opt(r.error.as_ref().map(|e| e.kind.as_str())),
             csv_field(&opt(r.error.as_ref().map(|e| e.message.clone()))),
         );
     }
