@@ -288,6 +288,9 @@ const FIT_MIN_SPEED: f64 = 0.1;
 
 /// The force objective for (standoff, τ): table values by linear least
 /// squares; returns (sum of squares, values, samples).
+// The fit's inputs are plain numbers of one objective evaluation; a struct
+// for them would only be unpacked again.
+#[allow(clippy::too_many_arguments)]
 fn force_fit(
     cycles: &[&ForceCycle],
     knots_mm: &[f64],
