@@ -55,7 +55,29 @@ fn fixture(
     notes: &str,
 ) -> anyhow::Result<()> {
     let truth = IdealTruth::from_params(&Params::paper());
-    let log = synth::generate(cfg, &truth);
+    fixture_with(
+        dir,
+        name,
+        cfg,
+        settings,
+        notes,
+        &truth,
+        json!({"model": "ideal mechanism (closed form) of the paper preset, quasi-static process load", "preset": "paper", "clearance_mm": 0.0, "standoff_mm": Params::paper().standoff * 1e3}),
+    )
+}
+
+/// Writes NAME.mcap and NAME.truth.json from any truth; `true_parameters`
+/// describes it (written from the generator's inputs, never read back).
+fn fixture_with(
+    dir: &Path,
+    name: &str,
+    cfg: &SynthConfig,
+    settings: &WriteSettings,
+    notes: &str,
+    truth: &dyn synth::Truth,
+    true_parameters: serde_json::Value,
+) -> anyhow::Result<()> {
+    let log = synth::generate(cfg, truth);
     let mut cur = Cursor::new(Vec::new());
     synth::write(&log, &mut cur, settings)?;
     let bytes = cur.into_inner();
@@ -81,7 +103,8 @@ fn fixture(
     let dur = cfg.duration_s();
     let t = json!({
         "file": format!("{name}.mcap"),
-        "generator": "examples/gen_logs.rs (pinsight::rig::synth, ideal mechanism of the paper preset)",
+        "generator": "examples/gen_logs.rs (pinsight::rig::synth)",
+        "true_parameters": true_parameters,
         "notes": notes,
         "file_size_bytes": bytes.len(),
         "compression": format!("{:?}", settings.compression),
@@ -226,6 +249,79 @@ fn fixtures(dir: &Path) -> anyhow::Result<()> {
         &WriteSettings::default(),
         "2 % speed ripple, 100 µs displacement latency, a 4 ms displacement and a 30 ms force drop-out, blocks of 100 samples",
     )?;
+    model_fixtures(dir)
+}
+
+/// Logs of the clearance-joint model (for calibration): the true clearance
+/// and standoff differ from the nominal ones in the metadata.
+fn model_fixtures(dir: &Path) -> anyhow::Result<()> {
+    let base = SynthConfig::default();
+    let runs = [
+        // (name, motor rpm, true clearance mm, true standoff mm, encoder offset, laser zero in metadata, seed, notes)
+        (
+            "synth-1200-model-c030",
+            1200.0,
+            0.30,
+            13.8,
+            0.0,
+            false,
+            21u64,
+            "clearance-joint model, true clearance 0.30 mm and standoff 13.8 mm (metadata: 0.1 and 14.0)",
+        ),
+        (
+            "synth-1500-model-c020",
+            1500.0,
+            0.20,
+            14.25,
+            0.2,
+            true,
+            22u64,
+            "clearance-joint model at 1500 rpm, true clearance 0.20 mm and standoff 14.25 mm (metadata: 0.1 and 14.0); encoder offset 0.2 rad not in the metadata, laser zero in it",
+        ),
+    ];
+    for (name, rpm, c_mm, so_mm, enc, lz_meta, seed, notes) in runs {
+        let mut p = Params::paper();
+        p.clearance = c_mm * 1e-3;
+        p.standoff = so_mm * 1e-3;
+        let cfg = SynthConfig {
+            motor_rpm: rpm,
+            revolutions: 30.4,
+            encoder_offset_rad: enc,
+            laser_zero_mm: 10.0,
+            seed,
+            ..base.clone()
+        };
+        let extra: Vec<(&str, &str)> = if lz_meta {
+            vec![("laser_zero_mm", "10.0")]
+        } else {
+            Vec::new()
+        };
+        let cfg = SynthConfig {
+            metadata: Some(meta(&cfg, &extra)),
+            ..cfg
+        };
+        let (warmup, grid_deg, rtol) = (3.0, 0.05, 1e-8);
+        let truth = synth::ModelTruth::simulate(&p, &cfg, warmup, grid_deg, rtol)?;
+        fixture_with(
+            dir,
+            name,
+            &cfg,
+            &WriteSettings::default(),
+            notes,
+            &truth,
+            json!({
+                "model": "clearance-joint model (pinsight::sim, level clearance, DOP853), constant crank speed, the speed ripple applied as a time warp",
+                "preset": "paper",
+                "clearance_mm": c_mm,
+                "standoff_mm": so_mm,
+                "motor_rpm": rpm,
+                "warmup_revolutions": warmup,
+                "grid_deg": grid_deg,
+                "rtol": rtol,
+                "nominal_vs_true": {"clearance_mm": [0.1, c_mm], "standoff_mm": [14.0, so_mm]},
+            }),
+        )?;
+    }
     Ok(())
 }
 

@@ -288,6 +288,9 @@ const FIT_MIN_SPEED: f64 = 0.1;
 
 /// The force objective for (standoff, τ): table values by linear least
 /// squares; returns (sum of squares, values, samples).
+// The fit's inputs are plain numbers of one objective evaluation; a struct
+// for them would only be unpacked again.
+#[allow(clippy::too_many_arguments)]
 fn force_fit(
     cycles: &[&ForceCycle],
     knots_mm: &[f64],
@@ -396,6 +399,17 @@ fn force_fit(
                         ata[i * k + j] += r[i] * r[j];
                     }
                 }
+            }
+            // F_ins at zero depth is 0 by the definition of the standoff (the
+            // pin meets the part: no load yet). Left free, that value and the
+            // standoff trade off along the onset ramp (a + b·(s − standoff)).
+            if knots_mm[0] <= 0.0 {
+                for i in 0..k {
+                    ata[i] = 0.0;
+                    ata[i * k] = 0.0;
+                }
+                ata[0] = 1.0;
+                atb[0] = 0.0;
             }
             let m = nalgebra::DMatrix::from_row_slice(k, k, &ata)
                 + nalgebra::DMatrix::identity(k, k) * 1e-9;
@@ -591,32 +605,35 @@ pub fn calibrate(
 
     // 2. Force: standoff, F_ins, load-cell lag.
     let omega_deg = |c: &crate::rig::Cycle| TAU * c.crank_rpm / 60.0;
-    let shift = psi; // laser phase (rad): measured stroke lags the true one by ψ
-    let fcycles: Vec<ForceCycle> = cycles
-        .iter()
-        .filter(|c| !c.force_n.is_empty())
-        .map(|c| {
-            // Advance the stroke by ψ (interpolated on the grid) and add Δz.
-            let k = shift / (TAU / n as f64);
-            let s: Vec<f64> = (0..n)
-                .map(|j| {
-                    let x = j as f64 + k;
-                    let i0 = x.floor();
-                    let w = x - i0;
-                    let a = c.stroke_mm[(i0 as i64).rem_euclid(n as i64) as usize];
-                    let b = c.stroke_mm[((i0 as i64) + 1).rem_euclid(n as i64) as usize];
-                    a + w * (b - a) + dz
-                })
-                .collect();
-            let v = velocity(&s, omega_deg(c));
-            ForceCycle {
-                s,
-                f: c.force_n.clone(),
-                v,
-                dt: c.duration_s / n as f64,
-            }
-        })
-        .collect();
+    // The measured stroke advanced by the laser phase ψ (interpolated on the
+    // grid) and corrected by Δz, with its velocity: the force fit's input.
+    let make_fcycles = |dz: f64, psi: f64| -> Vec<ForceCycle> {
+        cycles
+            .iter()
+            .filter(|c| !c.force_n.is_empty())
+            .map(|c| {
+                let k = psi / (TAU / n as f64);
+                let s: Vec<f64> = (0..n)
+                    .map(|j| {
+                        let x = j as f64 + k;
+                        let i0 = x.floor();
+                        let w = x - i0;
+                        let a = c.stroke_mm[(i0 as i64).rem_euclid(n as i64) as usize];
+                        let b = c.stroke_mm[((i0 as i64) + 1).rem_euclid(n as i64) as usize];
+                        a + w * (b - a) + dz
+                    })
+                    .collect();
+                let v = velocity(&s, omega_deg(c));
+                ForceCycle {
+                    s,
+                    f: c.force_n.clone(),
+                    v,
+                    dt: c.duration_s / n as f64,
+                }
+            })
+            .collect()
+    };
+    let fcycles = make_fcycles(dz, psi);
     let mut estimates = Vec::new();
     let meta_or = |m: Option<f64>| m;
     let nominal_so = base.standoff * 1e3;
@@ -665,8 +682,40 @@ pub fn calibrate(
             })
             .collect();
         progress.inc(1);
-        let s_so = jackknife(&jk.iter().map(|x| x.0).collect::<Vec<_>>());
-        let s_tau = jackknife(&jk.iter().map(|x| x.1).collect::<Vec<_>>());
+        let s_so_jk = jackknife(&jk.iter().map(|x| x.0).collect::<Vec<_>>());
+        let s_tau_jk = jackknife(&jk.iter().map(|x| x.1).collect::<Vec<_>>());
+        // The force is fitted against the stroke corrected by Δz and ψ: their
+        // uncertainties carry into the standoff (1:1 for Δz) and the lag.
+        // Propagated by refitting with each moved by its σ (first order).
+        let moved: Vec<(f64, f64)> = [(dz + sdz, psi), (dz, psi + spsi)]
+            .into_par_iter()
+            .map(|(d, ps)| {
+                if !(d.is_finite() && ps.is_finite()) {
+                    return (f64::NAN, f64::NAN);
+                }
+                let fc = make_fcycles(d, ps);
+                let refs: Vec<&ForceCycle> = fc.iter().collect();
+                let (so2, tau2, _) =
+                    fit_force(&refs, &knots, fixed, base, (so, tau), (0.3, 60e-6), 24);
+                (so2 - so, tau2 - tau)
+            })
+            .collect();
+        let prop = |f: fn(&(f64, f64)) -> f64| -> f64 {
+            moved
+                .iter()
+                .map(f)
+                .filter(|x| x.is_finite())
+                .map(|x| x * x)
+                .sum::<f64>()
+        };
+        let s_so = (s_so_jk * s_so_jk + prop(|x| x.0)).sqrt();
+        let s_tau = (s_tau_jk * s_tau_jk + prop(|x| x.1)).sqrt();
+        notes.push(format!(
+            "standoff σ {:.4} mm = jackknife {:.4} mm ⊕ laser zero/phase propagated {:.4} mm",
+            s_so,
+            s_so_jk,
+            prop(|x| x.0).sqrt()
+        ));
         let (ss_b, _, nb_s) = force_fit(
             &all,
             &knots,

@@ -211,6 +211,19 @@ pub struct RunResiduals {
     pub force_in_2sigma: f64,
 }
 
+/// At most this many measured cycles are kept one by one in the report (for
+/// charts: evenly spaced over the run); the bands cover every cycle.
+pub const MAX_SAMPLE_CYCLES: usize = 12;
+
+/// One measured cycle on the grid, kept for drawing.
+#[derive(Debug, Clone, Serialize)]
+pub struct SampleCycle {
+    pub index: u64,
+    /// Stroke (mm, with the laser zero used for the report) and force (N; empty without a force channel).
+    pub stroke_mm: Vec<f64>,
+    pub force_n: Vec<f64>,
+}
+
 /// The overlay of a run.
 #[derive(Debug, Clone, Serialize)]
 pub struct OverlayReport {
@@ -239,6 +252,8 @@ pub struct OverlayReport {
     /// The laser zero mark used for the measured stroke (re-estimated against
     /// the predicted mean when the log gives none).
     pub laser_zero: OffsetEstimate,
+    /// Up to [`MAX_SAMPLE_CYCLES`] measured cycles, evenly spaced over the run.
+    pub sample_cycles: Vec<SampleCycle>,
     pub notes: Vec<String>,
 }
 
@@ -577,6 +592,22 @@ pub fn overlay(
     if log.signals.force.is_none() {
         notes.push("no force channel: force residuals are not available".into());
     }
+    let k = selected.len();
+    let sample_idx: Vec<usize> = if k <= MAX_SAMPLE_CYCLES {
+        (0..k).collect()
+    } else {
+        (0..MAX_SAMPLE_CYCLES)
+            .map(|i| i * (k - 1) / (MAX_SAMPLE_CYCLES - 1))
+            .collect()
+    };
+    let sample_cycles = sample_idx
+        .iter()
+        .map(|&i| SampleCycle {
+            index: selected[i].index,
+            stroke_mm: strokes[i].clone(),
+            force_n: selected[i].force_n.clone(),
+        })
+        .collect();
     Ok(OverlayReport {
         file,
         params_notes,
@@ -599,6 +630,7 @@ pub fn overlay(
         cycles: rows,
         figures,
         laser_zero: lz,
+        sample_cycles,
         notes,
     })
 }
