@@ -510,7 +510,7 @@ mod tests {
     #[test]
     fn a_recipe_folder_loads_every_recipe_in_it() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/interop/images");
-        let book = RecipeBook::load(&[dir.clone()]);
+        let book = RecipeBook::load(std::slice::from_ref(&dir));
         let n = std::fs::read_dir(&dir)
             .unwrap()
             .filter(|e| e.as_ref().unwrap().path().extension() == Some("toml".as_ref()))
