@@ -267,6 +267,31 @@ fn rms(v: &[f64]) -> f64 {
     }
 }
 
+/// [`rms`] accumulated value by value (the same sum in the same order).
+#[derive(Default)]
+struct RmsAcc {
+    sum: f64,
+    n: usize,
+}
+
+impl RmsAcc {
+    #[inline]
+    fn add(&mut self, x: f64) {
+        if x.is_finite() {
+            self.sum += x * x;
+            self.n += 1;
+        }
+    }
+
+    fn rms(&self) -> f64 {
+        if self.n == 0 {
+            f64::NAN
+        } else {
+            (self.sum / self.n as f64).sqrt()
+        }
+    }
+}
+
 fn max_abs(v: &[f64]) -> f64 {
     v.iter()
         .copied()
@@ -452,13 +477,15 @@ pub fn overlay(
     let standoff_mm = params.standoff * 1e3;
     // Cycles are independent: compared in parallel, merged in cycle order
     // (the counts are integers, so the totals do not depend on the order).
+    // The residual vectors are not kept: the run's RMS is accumulated in the
+    // merge, in cycle order (the same sums as over one concatenated vector,
+    // without holding cycles × grid residuals).
     struct PerCycle {
         row: CycleResidual,
-        r: Vec<f64>,
-        rf: Vec<f64>,
         stroke: (usize, usize, usize),
         force: (usize, usize, usize),
     }
+    let grid = super::predict::crank_grid(&geom, n);
     let per_cycle: Vec<PerCycle> = selected
         .par_iter()
         .enumerate()
@@ -483,7 +510,7 @@ pub fn overlay(
                 inside(&c.force_n, &pr.force, noise_f)
             };
             let omega = TAU * c.crank_rpm / 60.0;
-            let (ideal_s, ideal_v) = super::predict::ideal_curves(&geom, n, omega);
+            let (ideal_s, ideal_v) = super::predict::ideal_curves_on(&geom, &grid, omega);
             let empty = vec![f64::NAN; n];
             let force = if c.force_n.is_empty() {
                 &empty
@@ -508,8 +535,6 @@ pub fn overlay(
             };
             PerCycle {
                 row,
-                r,
-                rf,
                 stroke: (a, b1, b2),
                 force: (fa, fb1, fb2),
             }
@@ -518,11 +543,16 @@ pub fn overlay(
     let mut rows = Vec::with_capacity(per_cycle.len());
     let (mut ns, mut sb, mut s2) = (0usize, 0usize, 0usize);
     let (mut nf, mut fb, mut f2) = (0usize, 0usize, 0usize);
-    let mut all_sr = Vec::with_capacity(per_cycle.len() * n);
-    let mut all_fr = Vec::with_capacity(per_cycle.len() * n);
-    for pc in per_cycle {
-        all_sr.extend_from_slice(&pc.r);
-        all_fr.extend_from_slice(&pc.rf);
+    let mut all_sr = RmsAcc::default();
+    let mut all_fr = RmsAcc::default();
+    for (c, pc) in selected.iter().zip(per_cycle) {
+        let pr = &groups[pc.row.group].prediction;
+        for (a, b) in c.stroke_mm.iter().zip(&pr.stroke.mean) {
+            all_sr.add((a + shift) - b);
+        }
+        for (a, b) in c.force_n.iter().zip(&pr.force.mean) {
+            all_fr.add(a - b);
+        }
         ns += pc.stroke.0;
         sb += pc.stroke.1;
         s2 += pc.stroke.2;
@@ -533,8 +563,10 @@ pub fn overlay(
     }
 
     // Bands and mean-curve residuals.
-    let strokes: Vec<Vec<f64>> = selected.iter().map(|c| stroke_of(c)).collect();
-    let measured_stroke = Band::of(strokes.iter().map(Vec::as_slice), n);
+    let measured_stroke =
+        Band::of_mapped(selected.iter().map(|c| c.stroke_mm.as_slice()), n, |s| {
+            s + shift
+        });
     let measured_force = Band::of(
         selected
             .iter()
@@ -572,8 +604,8 @@ pub fn overlay(
         stroke_mean_max_mm: max_abs(&residual_stroke_mm),
         force_mean_rms_n: rms(&residual_force_n),
         force_mean_max_n: max_abs(&residual_force_n),
-        stroke_rms_err_mm: rms(&all_sr),
-        force_rms_err_n: rms(&all_fr),
+        stroke_rms_err_mm: all_sr.rms(),
+        force_rms_err_n: all_fr.rms(),
         stroke_in_band: frac(sb, ns),
         stroke_in_2sigma: frac(s2, ns),
         force_in_band: frac(fb, nf),
@@ -628,7 +660,7 @@ pub fn overlay(
         .iter()
         .map(|&i| SampleCycle {
             index: selected[i].index,
-            stroke_mm: strokes[i].clone(),
+            stroke_mm: stroke_of(selected[i]),
             force_n: selected[i].force_n.clone(),
         })
         .collect();

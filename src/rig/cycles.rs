@@ -202,6 +202,16 @@ pub struct Band {
 impl Band {
     /// Statistics of the rows (NaN entries skipped).
     pub fn of<'a>(rows: impl Iterator<Item = &'a [f64]>, n: usize) -> Band {
+        Self::of_mapped(rows, n, |v| v)
+    }
+
+    /// [`Band::of`] of the rows with `map` applied to every entry (e.g. an
+    /// offset), without materialising the mapped rows.
+    pub fn of_mapped<'a>(
+        rows: impl Iterator<Item = &'a [f64]>,
+        n: usize,
+        map: impl Fn(f64) -> f64,
+    ) -> Band {
         let mut s = vec![0.0; n];
         let mut s2 = vec![0.0; n];
         let mut mn = vec![f64::INFINITY; n];
@@ -209,6 +219,7 @@ impl Band {
         let mut c = vec![0u32; n];
         for r in rows {
             for (j, &v) in r.iter().enumerate().take(n) {
+                let v = map(v);
                 if v.is_finite() {
                     s[j] += v;
                     s2[j] += v * v;
