@@ -2,7 +2,7 @@
 //! time of each step, run through the same library calls as the CLI.
 //!
 //! ```sh
-//! cargo run --release --example rig_phases -- target/bench/big.mcap [--out DIR] [--sequential]
+//! cargo run --release --example rig_phases -- target/bench/big.mcap [--out DIR] [--sequential] [--no-load-alone]
 //! ```
 //!
 //! `--sequential` runs the whole thing on one rayon thread (a comparison of
@@ -25,12 +25,27 @@ fn cpu_s() -> f64 {
     (tick(11) + tick(12)) / 100.0
 }
 
+fn status_kb(key: &str) -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .unwrap_or_default()
+        .lines()
+        .find(|l| l.starts_with(key))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
 struct Clock(Instant, f64);
 
 impl Clock {
     fn lap(&mut self, what: &str) {
         let (w, c) = (self.0.elapsed().as_secs_f64(), cpu_s());
-        eprintln!("{what:<28} wall {w:6.3} s  cpu {:6.3} s", c - self.1);
+        eprintln!(
+            "{what:<28} wall {w:6.3} s  cpu {:6.3} s  peak RSS so far {} MB  RSS now {} MB",
+            c - self.1,
+            status_kb("VmHWM:") / 1024,
+            status_kb("VmRSS:") / 1024
+        );
         *self = Clock(Instant::now(), c);
     }
 }
@@ -51,8 +66,10 @@ fn main() -> anyhow::Result<()> {
     let mut clk = Clock(Instant::now(), cpu_s());
     let lopts = load_options(None, &[])?;
     let pargs = ParamArgs::default();
-    let _ = pinsight::rig::load(&log, &lopts, &Progress::new(0))?;
-    clk.lap("load alone (dropped)");
+    if !args.iter().any(|a| a == "--no-load-alone") {
+        let _ = pinsight::rig::load(&log, &lopts, &Progress::new(0))?;
+        clk.lap("load alone (dropped)");
+    }
     let (log_data, file_params, cs) = load_and_cycles(&log, &lopts, &pargs, 720, false)?;
     clk.lap("load + cycles");
     let (params, notes) = model_params(&log_data, file_params, &[])?;

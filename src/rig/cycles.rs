@@ -1406,7 +1406,12 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
     let bdc = n / 2;
     for (i, c) in set.cycles.iter_mut().enumerate() {
         if disp.is_some() {
-            let g: Vec<f64> = raw_disp[i].iter().map(|d| d + z).collect();
+            // In place: the raw grid becomes the stroke grid (no second copy
+            // of every cycle's grid at the peak).
+            let mut g = std::mem::take(&mut raw_disp[i]);
+            for d in g.iter_mut() {
+                *d += z;
+            }
             let finite: Vec<(usize, f64)> = g
                 .iter()
                 .copied()
