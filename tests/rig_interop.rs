@@ -648,3 +648,65 @@ fn gaps_log_reports_every_fault() {
             .any(|f| f.code == FindingCode::AngleMismatch)
     );
 }
+
+/// The log as JSON with the load time zeroed (the only field that may differ
+/// between two loads of the same file), plus its summary with cycles.
+fn canonical(mut log: RigLog) -> (String, String) {
+    log.report.elapsed_s = 0.0;
+    let cs = analyse(&log, &CycleOptions::default());
+    let summary =
+        serde_json::to_string(&pinsight::rig::summary::summarize(&log, Some(&cs))).unwrap();
+    (serde_json::to_string(&log).unwrap(), summary)
+}
+
+/// The parallel decode (chunks on a 2-thread pool, in many small batches so
+/// that chunks of one channel interleave across batches and threads) gives
+/// byte-identical results — signals, findings and their messages, counts,
+/// summary — to the sequential decode, on every interop log and on the
+/// synthetic fixtures (block messages, dropouts, lz4, unchunked).
+#[test]
+fn parallel_decode_is_identical_to_sequential() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    let mut files: Vec<PathBuf> = ["interop/logs", "logs"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "mcap"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 15, "fixtures missing: {files:?}");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    for f in &files {
+        let mut seq = LoadOptions::default();
+        seq.read.parallel = false;
+        let mut par = LoadOptions::default();
+        par.read.batch_bytes = 1;
+        let a = canonical(load(f, &seq, &Progress::hidden()).unwrap());
+        let b = pool.install(|| canonical(load(f, &par, &Progress::hidden()).unwrap()));
+        let c = pool
+            .install(|| canonical(load(f, &LoadOptions::default(), &Progress::hidden()).unwrap()));
+        // About three batches of several items each.
+        let mut thirds = LoadOptions::default();
+        thirds.read.batch_bytes = std::fs::metadata(f).unwrap().len() / 3 + 1;
+        let d = pool.install(|| canonical(load(f, &thirds, &Progress::hidden()).unwrap()));
+        assert!(
+            a.0 == b.0,
+            "{}: parallel decode (one item per batch) differs",
+            f.display()
+        );
+        assert!(a.1 == b.1, "{}: summaries differ", f.display());
+        assert!(
+            a == c,
+            "{}: parallel decode (default batches) differs",
+            f.display()
+        );
+        assert!(
+            a == d,
+            "{}: parallel decode (three batches) differs",
+            f.display()
+        );
+    }
+}

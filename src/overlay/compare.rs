@@ -28,6 +28,7 @@ use crate::progress::Progress;
 use crate::rig::RigLog;
 use crate::rig::cycles::{Band, CycleSet, OffsetEstimate, ValueSource};
 use crate::sim::SimError;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::f64::consts::TAU;
 
@@ -266,6 +267,31 @@ fn rms(v: &[f64]) -> f64 {
     }
 }
 
+/// [`rms`] accumulated value by value (the same sum in the same order).
+#[derive(Default)]
+struct RmsAcc {
+    sum: f64,
+    n: usize,
+}
+
+impl RmsAcc {
+    #[inline]
+    fn add(&mut self, x: f64) {
+        if x.is_finite() {
+            self.sum += x * x;
+            self.n += 1;
+        }
+    }
+
+    fn rms(&self) -> f64 {
+        if self.n == 0 {
+            f64::NAN
+        } else {
+            (self.sum / self.n as f64).sqrt()
+        }
+    }
+}
+
 fn max_abs(v: &[f64]) -> f64 {
     v.iter()
         .copied()
@@ -449,68 +475,98 @@ pub fn overlay(
     // Per-cycle residuals.
     let geom = Geometry::of(params);
     let standoff_mm = params.standoff * 1e3;
-    let mut rows = Vec::new();
+    // Cycles are independent: compared in parallel, merged in cycle order
+    // (the counts are integers, so the totals do not depend on the order).
+    // The residual vectors are not kept: the run's RMS is accumulated in the
+    // merge, in cycle order (the same sums as over one concatenated vector,
+    // without holding cycles × grid residuals).
+    struct PerCycle {
+        row: CycleResidual,
+        stroke: (usize, usize, usize),
+        force: (usize, usize, usize),
+    }
+    let grid = super::predict::crank_grid(&geom, n);
+    let per_cycle: Vec<PerCycle> = selected
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let g = group_of[i];
+            let pr = &groups[g].prediction;
+            let s = stroke_of(c);
+            let r: Vec<f64> = s.iter().zip(&pr.stroke.mean).map(|(a, b)| a - b).collect();
+            let rf: Vec<f64> = if c.force_n.is_empty() {
+                Vec::new()
+            } else {
+                c.force_n
+                    .iter()
+                    .zip(&pr.force.mean)
+                    .map(|(a, b)| a - b)
+                    .collect()
+            };
+            let (a, b1, b2) = inside(&s, &pr.stroke, noise_s);
+            let (fa, fb1, fb2) = if c.force_n.is_empty() {
+                (0, 0, 0)
+            } else {
+                inside(&c.force_n, &pr.force, noise_f)
+            };
+            let omega = TAU * c.crank_rpm / 60.0;
+            let (ideal_s, ideal_v) = super::predict::ideal_curves_on(&geom, &grid, omega);
+            let empty = vec![f64::NAN; n];
+            let force = if c.force_n.is_empty() {
+                &empty
+            } else {
+                &c.force_n
+            };
+            let row = CycleResidual {
+                index: c.index,
+                t_start_ns: c.t_start_ns,
+                motor_rpm: c.crank_rpm * gear,
+                group: g,
+                stroke_rms_err_mm: rms(&r),
+                stroke_max_err_mm: max_abs(&r),
+                stroke_err_tdc_mm: r[0],
+                stroke_err_bdc_mm: r[n / 2],
+                force_rms_err_n: rms(&rf),
+                stroke_in_band: frac(b1, a),
+                stroke_in_2sigma: frac(b2, a),
+                force_in_band: frac(fb1, fa),
+                force_in_2sigma: frac(fb2, fa),
+                measured: CycleFigures::of(&s, force, &ideal_s, &ideal_v, omega, standoff_mm),
+            };
+            PerCycle {
+                row,
+                stroke: (a, b1, b2),
+                force: (fa, fb1, fb2),
+            }
+        })
+        .collect();
+    let mut rows = Vec::with_capacity(per_cycle.len());
     let (mut ns, mut sb, mut s2) = (0usize, 0usize, 0usize);
     let (mut nf, mut fb, mut f2) = (0usize, 0usize, 0usize);
-    let mut all_sr = Vec::new();
-    let mut all_fr = Vec::new();
-    for (i, c) in selected.iter().enumerate() {
-        let g = group_of[i];
-        let pr = &groups[g].prediction;
-        let s = stroke_of(c);
-        let r: Vec<f64> = s.iter().zip(&pr.stroke.mean).map(|(a, b)| a - b).collect();
-        let rf: Vec<f64> = if c.force_n.is_empty() {
-            Vec::new()
-        } else {
-            c.force_n
-                .iter()
-                .zip(&pr.force.mean)
-                .map(|(a, b)| a - b)
-                .collect()
-        };
-        all_sr.extend(r.iter().copied());
-        all_fr.extend(rf.iter().copied());
-        let (a, b1, b2) = inside(&s, &pr.stroke, noise_s);
-        ns += a;
-        sb += b1;
-        s2 += b2;
-        let (fa, fb1, fb2) = if c.force_n.is_empty() {
-            (0, 0, 0)
-        } else {
-            inside(&c.force_n, &pr.force, noise_f)
-        };
-        nf += fa;
-        fb += fb1;
-        f2 += fb2;
-        let omega = TAU * c.crank_rpm / 60.0;
-        let (ideal_s, ideal_v) = super::predict::ideal_curves(&geom, n, omega);
-        let empty = vec![f64::NAN; n];
-        let force = if c.force_n.is_empty() {
-            &empty
-        } else {
-            &c.force_n
-        };
-        rows.push(CycleResidual {
-            index: c.index,
-            t_start_ns: c.t_start_ns,
-            motor_rpm: c.crank_rpm * gear,
-            group: g,
-            stroke_rms_err_mm: rms(&r),
-            stroke_max_err_mm: max_abs(&r),
-            stroke_err_tdc_mm: r[0],
-            stroke_err_bdc_mm: r[n / 2],
-            force_rms_err_n: rms(&rf),
-            stroke_in_band: frac(b1, a),
-            stroke_in_2sigma: frac(b2, a),
-            force_in_band: frac(fb1, fa),
-            force_in_2sigma: frac(fb2, fa),
-            measured: CycleFigures::of(&s, force, &ideal_s, &ideal_v, omega, standoff_mm),
-        });
+    let mut all_sr = RmsAcc::default();
+    let mut all_fr = RmsAcc::default();
+    for (c, pc) in selected.iter().zip(per_cycle) {
+        let pr = &groups[pc.row.group].prediction;
+        for (a, b) in c.stroke_mm.iter().zip(&pr.stroke.mean) {
+            all_sr.add((a + shift) - b);
+        }
+        for (a, b) in c.force_n.iter().zip(&pr.force.mean) {
+            all_fr.add(a - b);
+        }
+        ns += pc.stroke.0;
+        sb += pc.stroke.1;
+        s2 += pc.stroke.2;
+        nf += pc.force.0;
+        fb += pc.force.1;
+        f2 += pc.force.2;
+        rows.push(pc.row);
     }
 
     // Bands and mean-curve residuals.
-    let strokes: Vec<Vec<f64>> = selected.iter().map(|c| stroke_of(c)).collect();
-    let measured_stroke = Band::of(strokes.iter().map(Vec::as_slice), n);
+    let measured_stroke =
+        Band::of_mapped(selected.iter().map(|c| c.stroke_mm.as_slice()), n, |s| {
+            s + shift
+        });
     let measured_force = Band::of(
         selected
             .iter()
@@ -548,8 +604,8 @@ pub fn overlay(
         stroke_mean_max_mm: max_abs(&residual_stroke_mm),
         force_mean_rms_n: rms(&residual_force_n),
         force_mean_max_n: max_abs(&residual_force_n),
-        stroke_rms_err_mm: rms(&all_sr),
-        force_rms_err_n: rms(&all_fr),
+        stroke_rms_err_mm: all_sr.rms(),
+        force_rms_err_n: all_fr.rms(),
         stroke_in_band: frac(sb, ns),
         stroke_in_2sigma: frac(s2, ns),
         force_in_band: frac(fb, nf),
@@ -604,7 +660,7 @@ pub fn overlay(
         .iter()
         .map(|&i| SampleCycle {
             index: selected[i].index,
-            stroke_mm: strokes[i].clone(),
+            stroke_mm: stroke_of(selected[i]),
             force_n: selected[i].force_n.clone(),
         })
         .collect();

@@ -182,12 +182,33 @@ pub fn velocity(stroke_mm: &[f64], omega: f64) -> Vec<f64> {
 
 /// The ideal mechanism's stroke (mm) and velocity (m/s) on the grid at ω.
 pub fn ideal_curves(geom: &Geometry, n: usize, omega: f64) -> (Vec<f64>, Vec<f64>) {
+    ideal_curves_on(geom, &crank_grid(geom, n), omega)
+}
+
+/// The grid's crank angles from top dead centre with their sines and
+/// cosines, (θ2, sin θ2, cos θ2): computed once for many [`ideal_curves_on`].
+pub fn crank_grid(geom: &Geometry, n: usize) -> Vec<(f64, f64, f64)> {
     let tdc = geom.tdc_angle();
-    let mut s = Vec::with_capacity(n);
-    let mut v = Vec::with_capacity(n);
-    for j in 0..n {
-        let th = tdc + j as f64 * TAU / n as f64;
-        let p = geom.pose(th, omega, 0.0);
+    (0..n)
+        .map(|j| {
+            let th = tdc + j as f64 * TAU / n as f64;
+            let (s, c) = th.sin_cos();
+            (th, s, c)
+        })
+        .collect()
+}
+
+/// [`ideal_curves`] on a precomputed [`crank_grid`] (the same numbers,
+/// without the trigonometry: the overlay needs them once per cycle).
+pub fn ideal_curves_on(
+    geom: &Geometry,
+    grid: &[(f64, f64, f64)],
+    omega: f64,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut s = Vec::with_capacity(grid.len());
+    let mut v = Vec::with_capacity(grid.len());
+    for &(th, s2, c2) in grid {
+        let p = geom.pose_sc(th, s2, c2, omega, 0.0);
         s.push((p.x4 - geom.x4_tdc()) * 1e3);
         v.push(p.v4);
     }

@@ -202,6 +202,16 @@ pub struct Band {
 impl Band {
     /// Statistics of the rows (NaN entries skipped).
     pub fn of<'a>(rows: impl Iterator<Item = &'a [f64]>, n: usize) -> Band {
+        Self::of_mapped(rows, n, |v| v)
+    }
+
+    /// [`Band::of`] of the rows with `map` applied to every entry (e.g. an
+    /// offset), without materialising the mapped rows.
+    pub fn of_mapped<'a>(
+        rows: impl Iterator<Item = &'a [f64]>,
+        n: usize,
+        map: impl Fn(f64) -> f64,
+    ) -> Band {
         let mut s = vec![0.0; n];
         let mut s2 = vec![0.0; n];
         let mut mn = vec![f64::INFINITY; n];
@@ -209,6 +219,7 @@ impl Band {
         let mut c = vec![0u32; n];
         for r in rows {
             for (j, &v) in r.iter().enumerate().take(n) {
+                let v = map(v);
                 if v.is_finite() {
                     s[j] += v;
                     s2[j] += v * v;
@@ -1395,7 +1406,12 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
     let bdc = n / 2;
     for (i, c) in set.cycles.iter_mut().enumerate() {
         if disp.is_some() {
-            let g: Vec<f64> = raw_disp[i].iter().map(|d| d + z).collect();
+            // In place: the raw grid becomes the stroke grid (no second copy
+            // of every cycle's grid at the peak).
+            let mut g = std::mem::take(&mut raw_disp[i]);
+            for d in g.iter_mut() {
+                *d += z;
+            }
             let finite: Vec<(usize, f64)> = g
                 .iter()
                 .copied()

@@ -1,0 +1,91 @@
+//! Phase breakdown of `pinsight overlay` on one log: wall and process CPU
+//! time of each step, run through the same library calls as the CLI.
+//!
+//! ```sh
+//! cargo run --release --example rig_phases -- target/bench/big.mcap [--out DIR] [--sequential] [--no-load-alone]
+//! ```
+//!
+//! `--sequential` runs the whole thing on one rayon thread (a comparison of
+//! the parallel decode with the sequential one). A diagnostic, not a
+//! benchmark: figures for BENCHMARKS.md come from `/usr/bin/time` on the CLI.
+
+use pinsight::cli::common::ParamArgs;
+use pinsight::cli::overlay::{load_and_cycles, load_options, write_outputs};
+use pinsight::overlay::compare::{OverlayOptions, model_params, overlay};
+use pinsight::progress::Progress;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// CPU time (user + system) of this process so far, s.
+fn cpu_s() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = after.split_whitespace().collect();
+    let tick = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (tick(11) + tick(12)) / 100.0
+}
+
+fn status_kb(key: &str) -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .unwrap_or_default()
+        .lines()
+        .find(|l| l.starts_with(key))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
+struct Clock(Instant, f64);
+
+impl Clock {
+    fn lap(&mut self, what: &str) {
+        let (w, c) = (self.0.elapsed().as_secs_f64(), cpu_s());
+        eprintln!(
+            "{what:<28} wall {w:6.3} s  cpu {:6.3} s  peak RSS so far {} MB  RSS now {} MB",
+            c - self.1,
+            status_kb("VmHWM:") / 1024,
+            status_kb("VmRSS:") / 1024
+        );
+        *self = Clock(Instant::now(), c);
+    }
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let log = PathBuf::from(args.first().cloned().unwrap_or_default());
+    let out = args
+        .iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1))
+        .map(PathBuf::from);
+    if args.iter().any(|a| a == "--sequential") {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build_global()?;
+    }
+    let mut clk = Clock(Instant::now(), cpu_s());
+    let lopts = load_options(None, &[])?;
+    let pargs = ParamArgs::default();
+    if !args.iter().any(|a| a == "--no-load-alone") {
+        let _ = pinsight::rig::load(&log, &lopts, &Progress::new(0))?;
+        clk.lap("load alone (dropped)");
+    }
+    let (log_data, file_params, cs) = load_and_cycles(&log, &lopts, &pargs, 720, false)?;
+    clk.lap("load + cycles");
+    let (params, notes) = model_params(&log_data, file_params, &[])?;
+    let progress = Progress::new(0);
+    let report = overlay(
+        &log_data,
+        &cs,
+        &params,
+        notes,
+        &OverlayOptions::default(),
+        &progress,
+    )?;
+    clk.lap("overlay (predict + compare)");
+    if let Some(dir) = out {
+        write_outputs(&dir, &report)?;
+        clk.lap("outputs");
+    }
+    Ok(())
+}
