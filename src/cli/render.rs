@@ -92,6 +92,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if pane == PaneId::Methods {
             session.run_methods_now();
         }
+        // The analyses of the data panes (the TUI runs them on its worker).
+        session.prepare_pane(pane, &ui);
         if pane == PaneId::Study {
             let progress = crate::progress::Progress::new(session.study_setup.grid.len() as u64);
             let _bar = crate::progress::ProgressBarGuard::start(progress.clone(), "study");
