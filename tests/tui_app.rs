@@ -235,7 +235,10 @@ fn signals_keys_zoom_pan_toggle() {
     app.update(key(KeyCode::Char('+')));
     let w = app.ui.signals.window.unwrap();
     let quarter = (full[1] - full[0]) / 4.0;
-    assert!(((w[1] - w[0]) - quarter).abs() < 1e-9 * quarter.max(1.0), "{w:?} vs {full:?}");
+    assert!(
+        ((w[1] - w[0]) - quarter).abs() < 1e-9 * quarter.max(1.0),
+        "{w:?} vs {full:?}"
+    );
     app.update(Msg::Key(KeyEvent::new(
         KeyCode::Char('L'),
         KeyModifiers::SHIFT,
@@ -326,7 +329,10 @@ fn vision_yield_and_overlay_run_on_the_worker_with_the_demo_data() {
     run_jobs(&mut app);
     let s = screen(&app, 120, 40);
     assert!(s.contains("verdict: FAIL"), "{s}");
-    assert!(s.contains("HDR-2x10-2.54 (recognised among 4 recipes"), "{s}");
+    assert!(
+        s.contains("HDR-2x10-2.54 (recognised among 4 recipes"),
+        "{s}"
+    );
     assert!(s.contains("Pins (20)"), "{s}");
     // Next image: round pins, a pass in the ground truth.
     app.update(key(KeyCode::Char('n')));

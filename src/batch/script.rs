@@ -521,7 +521,14 @@ impl Runner {
     fn run(&mut self, index: usize, t: &toml::Table) -> StepReport {
         let what = match str_of(t, "what") {
             Ok(Some(w)) => w.to_string(),
-            Ok(None) => return err(index, "run", "", "give `what` (model, study, methods, yield or overlay)"),
+            Ok(None) => {
+                return err(
+                    index,
+                    "run",
+                    "",
+                    "give `what` (model, study, methods, yield or overlay)",
+                );
+            }
             Err(e) => return err(index, "run", "", e),
         };
         match what.as_str() {
@@ -615,9 +622,7 @@ impl Runner {
                 index,
                 "run",
                 other,
-                format!(
-                    "cannot run `{other}` (allowed: model, study, methods, yield, overlay)"
-                ),
+                format!("cannot run `{other}` (allowed: model, study, methods, yield, overlay)"),
             ),
         }
     }

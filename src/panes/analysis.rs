@@ -12,10 +12,10 @@
 //! session.
 
 use super::session::{ImageEntry, ImageSource, LogEntry, RecipeEntry, Session};
-use crate::rig::RigLog;
-use crate::rig::cycles::CycleSet;
 use crate::overlay::compare::{OverlayOptions, OverlayReport, model_params, overlay};
 use crate::progress::Progress;
+use crate::rig::RigLog;
+use crate::rig::cycles::CycleSet;
 use crate::vision::InspectOptions;
 use crate::vision::batch::{Item, ItemResult, RecipeBook, Source, inspect_item, run_batch};
 use crate::vision::overlay::{OverlayOptions as DrawOptions, draw_overlay};

@@ -69,6 +69,10 @@ pub struct OverlayView {
     pub level: Option<String>,
     pub level_reason: Option<String>,
     pub message: Option<String>,
+    /// Where the model parameters came from, laser zero, noise (JSON only).
+    pub notes: Vec<String>,
+    /// Time the comparison took (JSON only: not drawn, so screens are stable).
+    pub wall_ms: Option<f64>,
 }
 
 impl OverlayView {
@@ -121,7 +125,13 @@ fn grid_points(deg: &[f64], y: &[f64], cols: usize) -> Vec<(f64, f64)> {
     let pts: Vec<(f64, f64)> = deg
         .iter()
         .zip(y)
-        .map(|(&x, &v)| if v.is_finite() { (x, v) } else { (f64::NAN, f64::NAN) })
+        .map(|(&x, &v)| {
+            if v.is_finite() {
+                (x, v)
+            } else {
+                (f64::NAN, f64::NAN)
+            }
+        })
         .collect();
     decimate_points(&pts, 0.0, 360.0, cols)
 }
@@ -142,6 +152,8 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
         level: None,
         level_reason: None,
         message: None,
+        notes: Vec::new(),
+        wall_ms: None,
     };
     let Some(run) = s.overlay_of(li) else {
         v.message = Some(format!(
@@ -160,8 +172,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
     v.level = Some(r.level.clone());
     let revs: usize = r.groups.iter().map(|g| g.prediction.revs).sum();
     v.level_reason = Some(format!(
-        "{} level with c = {} mm, standoff {} mm; the joint's motion is chaotic, so {} predicted revolutions form a band (speed groups: {}). {}",
-        r.level,
+        "c = {} mm, standoff {} mm (log metadata); chaotic joint motion: {} predicted revolutions form a band ({})",
         r.clearance_mm,
         r.standoff_mm,
         revs,
@@ -170,8 +181,9 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
             .map(|g| format!("{:.0} rpm × {} cycles", g.motor_rpm, g.cycles))
             .collect::<Vec<_>>()
             .join(", "),
-        r.params_notes.join("; ")
     ));
+    v.notes = r.params_notes.iter().chain(&r.notes).cloned().collect();
+    v.wall_ms = Some(run.wall_ms);
     let deg = &r.grid_deg;
     let nc = r.cycles.len();
     let sel = ui.overlay.cycle.map(|c| c.min(nc.saturating_sub(1)));
@@ -205,7 +217,6 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
         line("predicted mean", &pred_f.mean, 1, SeriesKind::Line),
     ];
     let residual: Vec<f64>;
-    let resid_f: Vec<f64>;
     match chosen.and_then(|c| cs.cycles.iter().find(|x| x.index == c.index)) {
         Some(c) => {
             v.showing = format!("cycle {}", c.index);
@@ -214,19 +225,35 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
             stroke.push(line("measured", &ms, 3, SeriesKind::Line));
             if !c.force_n.is_empty() {
                 force.push(line("measured", &c.force_n, 3, SeriesKind::Line));
-                resid_f = c.force_n.iter().zip(&pred_f.mean).map(|(a, b)| a - b).collect();
-            } else {
-                resid_f = Vec::new();
             }
         }
         None => {
             v.showing = format!("envelope of {nc} cycles");
-            stroke.push(line("measured min", &r.measured_stroke.min, 3, SeriesKind::Line));
-            stroke.push(line("measured max", &r.measured_stroke.max, 3, SeriesKind::Line));
-            force.push(line("measured min", &r.measured_force.min, 3, SeriesKind::Line));
-            force.push(line("measured max", &r.measured_force.max, 3, SeriesKind::Line));
+            stroke.push(line(
+                "measured min",
+                &r.measured_stroke.min,
+                3,
+                SeriesKind::Line,
+            ));
+            stroke.push(line(
+                "measured max",
+                &r.measured_stroke.max,
+                3,
+                SeriesKind::Line,
+            ));
+            force.push(line(
+                "measured min",
+                &r.measured_force.min,
+                3,
+                SeriesKind::Line,
+            ));
+            force.push(line(
+                "measured max",
+                &r.measured_force.max,
+                3,
+                SeriesKind::Line,
+            ));
             residual = r.residual_stroke_mm.clone();
-            resid_f = r.residual_force_n.clone();
         }
     }
     v.stroke = Some(ChartView::new(
@@ -245,17 +272,19 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
             Some([0.0, 360.0]),
         ));
     }
-    let _ = resid_f;
     let noise = r.noise_stroke_mm;
     let band: Vec<f64> = deg.iter().map(|_| 2.0 * noise).collect();
     let neg: Vec<f64> = band.iter().map(|x| -x).collect();
     v.residual = Some(ChartView::new(
-        format!("stroke residual (measured − predicted mean) — {}", v.showing),
+        format!(
+            "stroke residual (measured − predicted mean) — {}",
+            v.showing
+        ),
         "crank angle from TDC (°)",
         "mm",
         vec![
-            line("±2σ sensor noise", &band, 8, SeriesKind::Reference),
-            line("", &neg, 8, SeriesKind::Reference),
+            line("+2σ noise", &band, 8, SeriesKind::Reference),
+            line("−2σ noise", &neg, 8, SeriesKind::Reference),
             line("residual", &residual, 3, SeriesKind::Line),
         ],
         Some([0.0, 360.0]),
@@ -285,7 +314,6 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
         ("force RMS residual N".into(), run_r.force_rms_err_n),
         ("force in band".into(), run_r.force_in_band),
         ("laser noise mm".into(), r.noise_stroke_mm),
-        ("run ms".into(), run.wall_ms),
     ];
     v.figures.retain(|(_, x)| x.is_finite());
     v
@@ -306,10 +334,11 @@ fn prediction_view(s: &Session, ui: &PaneState) -> OverlayView {
         level: run.map(|r| r.level.name().to_string()),
         level_reason: run.map(|r| r.level_reason.clone()),
         message: None,
+        notes: Vec::new(),
+        wall_ms: None,
     };
-    v.message = Some(
-        "prediction only: no rig log loaded (open a .mcap log with o to compare)".into(),
-    );
+    v.message =
+        Some("prediction only: no rig log loaded (open a .mcap log with o to compare)".into());
     if let Some(r) = run {
         if let Some(c) = &r.result.curves {
             // The last reported revolution against crank angle.

@@ -117,14 +117,7 @@ impl VisionView {
 fn status_counts(c: &crate::vision::StatusCounts) -> String {
     use crate::vision::PinStatus as P;
     let mut parts = Vec::new();
-    for s in [
-        P::Ok,
-        P::Missing,
-        P::Damaged,
-        P::Bent,
-        P::Short,
-        P::High,
-    ] {
+    for s in [P::Ok, P::Missing, P::Damaged, P::Bent, P::Short, P::High] {
         let n = c.get(s);
         if n > 0 {
             parts.push(format!("{n} {}", s.as_str()));

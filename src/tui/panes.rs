@@ -306,7 +306,12 @@ fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme) {
         lines.push(Line::styled(format!("  why: {r}"), theme.muted()));
     }
     for (k, x) in &v.figures {
-        lines.push(kv_line(k, format_value(*x), theme));
+        let shown = if x.fract() == 0.0 && x.abs() < 1e9 {
+            format!("{x:.0}")
+        } else {
+            format_value(*x)
+        };
+        lines.push(kv_line(k, shown, theme));
     }
     if let Some(m) = &v.message {
         lines.push(Line::raw(""));
@@ -584,7 +589,10 @@ fn vision(f: &mut Frame, area: Rect, v: &VisionView, theme: &Theme, img: &mut Im
     if let Some(vd) = &v.verdict {
         lines.push(Line::from(vec![
             Span::styled("verdict: ", theme.muted()),
-            Span::styled(vd.to_uppercase(), theme.status(vd).add_modifier(Modifier::BOLD)),
+            Span::styled(
+                vd.to_uppercase(),
+                theme.status(vd).add_modifier(Modifier::BOLD),
+            ),
             Span::raw(match (&v.counts, v.extras) {
                 (Some(c), 0) => format!("  {c}"),
                 (Some(c), x) => format!("  {c}, {x} extra"),
@@ -629,7 +637,9 @@ fn vision(f: &mut Frame, area: Rect, v: &VisionView, theme: &Theme, img: &mut Im
                     Cell::from(opt3(p.dx_mm)),
                     Cell::from(opt3(p.dy_mm)),
                     Cell::from(if side_view {
-                        opt3(p.height_mm)
+                        p.height_mm
+                            .filter(|x| x.is_finite())
+                            .map_or("–".into(), |x| format!("{x:.3}"))
                     } else {
                         p.area_ratio
                             .filter(|x| x.is_finite())
@@ -723,15 +733,9 @@ fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
     if r.extras > 0 {
         lines.push(kv_line(
             "extras",
-            format!(
-                "{} on {} connector(s)",
-                r.extras, r.connectors_with_extras
-            ),
+            format!("{} on {} connector(s)", r.extras, r.connectors_with_extras),
             theme,
         ));
-    }
-    if let Some(ms) = v.wall_ms {
-        lines.push(kv_line("run", format!("{:.0} ms", ms), theme));
     }
     if let Some(m) = &v.message {
         lines.push(Line::styled(m.clone(), theme.warn()));
@@ -768,15 +772,18 @@ fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
         }
     }
     text_block(f, left, "Yield", lines, theme);
-    let worst: Vec<&crate::vision::report::PositionStats> =
-        r.worst_pins.iter().filter(|p| p.defects > 0).take(8).collect();
+    let worst: Vec<&crate::vision::report::PositionStats> = r
+        .worst_pins
+        .iter()
+        .filter(|p| p.defects > 0)
+        .take(8)
+        .collect();
     let worst_h = if worst.is_empty() {
         0
     } else {
         (worst.len() as u16 + 3).min(side.height / 2)
     };
-    let [wa, ia] =
-        Layout::vertical([Constraint::Length(worst_h), Constraint::Min(3)]).areas(side);
+    let [wa, ia] = Layout::vertical([Constraint::Length(worst_h), Constraint::Min(3)]).areas(side);
     if worst_h > 0 {
         let rows: Vec<Row> = worst
             .iter()

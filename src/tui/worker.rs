@@ -12,12 +12,12 @@ use crate::panes::analysis::{
 use crate::panes::session::{
     ImageEntry, Loaded, ModelRun, StudySetup, load_path, run_model, run_study,
 };
+use crate::progress::Progress;
 use crate::rig::RigLog;
 use crate::rig::cycles::CycleSet;
-use crate::vision::batch::RecipeBook;
-use crate::progress::Progress;
 use crate::sim::LevelChoice;
 use crate::sim::sweep::SweepResult;
+use crate::vision::batch::RecipeBook;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
