@@ -71,6 +71,9 @@ pub struct OverlayView {
     pub message: Option<String>,
     /// Where the model parameters came from, laser zero, noise (JSON only).
     pub notes: Vec<String>,
+    /// The run's residual figures (the library's `RunResiduals`: stroke and
+    /// force RMS residuals, fractions inside the predicted band), for checks.
+    pub residuals: Option<crate::overlay::compare::RunResiduals>,
     /// Time the comparison took (JSON only: not drawn, so screens are stable).
     pub wall_ms: Option<f64>,
 }
@@ -154,6 +157,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
         message: None,
         notes: Vec::new(),
         wall_ms: None,
+        residuals: None,
     };
     let Some(run) = s.overlay_of(li) else {
         v.message = Some(format!(
@@ -306,6 +310,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
         })
         .collect();
     let run_r = &r.run;
+    v.residuals = Some(run_r.clone());
     v.figures = vec![
         ("cycles compared".into(), run_r.cycles as f64),
         ("stroke RMS residual mm".into(), run_r.stroke_rms_err_mm),
@@ -336,6 +341,7 @@ fn prediction_view(s: &Session, ui: &PaneState) -> OverlayView {
         message: None,
         notes: Vec::new(),
         wall_ms: None,
+        residuals: None,
     };
     v.message =
         Some("prediction only: no rig log loaded (open a .mcap log with o to compare)".into());
