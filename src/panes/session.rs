@@ -737,12 +737,12 @@ fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
         (LoadStatus::Error, _) => FileStatus::Error(if listed.is_empty() {
             "nothing usable in the log".into()
         } else {
-            listed.join("; ")
+            listed.join(FINDING_SEP)
         }),
         (_, Some(Severity::DataLoss | Severity::Error)) => {
-            FileStatus::Warning(format!("partial: {}", listed.join("; ")))
+            FileStatus::Warning(format!("partial: {}", listed.join(FINDING_SEP)))
         }
-        (_, Some(_)) => FileStatus::Warning(listed.join("; ")),
+        (_, Some(_)) => FileStatus::Warning(listed.join(FINDING_SEP)),
         (_, None) => FileStatus::Loaded,
     };
     let detail = format!(
@@ -830,6 +830,10 @@ fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
     }
     out
 }
+
+/// Separates a log's findings in its entry's message (one finding may hold
+/// semicolons of its own).
+pub const FINDING_SEP: &str = " | ";
 
 /// A finding's message without the file name it starts with (the Session
 /// pane lists it under the file already).

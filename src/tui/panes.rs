@@ -143,8 +143,30 @@ fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme) {
         let mut st = TableState::default().with_selected(Some(v.selected));
         f.render_stateful_widget(table, files_area, &mut st);
     }
-    // Details: logs' metadata, recipes, images.
+    // Details: display, the selected file's findings, logs' metadata,
+    // recipes, images.
     let mut lines = Vec::new();
+    if let Some(d) = &v.display {
+        lines.push(kv_line("display", d.clone(), theme));
+    }
+    lines.push(kv_line(
+        "images",
+        format!("{}, recipes {}", v.images, v.recipes.len()),
+        theme,
+    ));
+    if let Some(sel) = v.files.get(v.selected) {
+        if !sel.message.is_empty() {
+            // One line per finding (the selected file's warnings or error).
+            let w = detail_area.width.saturating_sub(4) as usize;
+            lines.push(Line::from(vec![
+                Span::styled(format!("{} ", sel.status), theme.status(&sel.status)),
+                Span::raw(trunc_left(&sel.path, w.saturating_sub(8))),
+            ]));
+            for m in sel.message.split(crate::panes::session::FINDING_SEP) {
+                lines.push(Line::styled(format!("  {}", trunc(m, w)), theme.muted()));
+            }
+        }
+    }
     for l in &v.logs {
         lines.push(Line::styled(trunc_left(&l.path, 60), theme.header()));
         lines.push(kv_line(
@@ -162,10 +184,6 @@ fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme) {
         for r in &v.recipes {
             lines.push(Line::raw(format!("  {r}")));
         }
-    }
-    lines.push(kv_line("images", v.images.to_string(), theme));
-    if let Some(d) = &v.display {
-        lines.push(kv_line("display", d.clone(), theme));
     }
     text_block(f, detail_area, "Metadata", lines, theme);
     if err_h > 0 {
