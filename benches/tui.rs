@@ -60,6 +60,7 @@ fn big_log(channels: usize, n: usize) -> Session {
             cycles,
             meta: Vec::new(),
         },
+        rig: None,
     });
     s
 }

@@ -51,6 +51,16 @@ fn ci_script_passes_and_writes_every_export() {
     assert!(csv.starts_with("case,clearance_mm,motor_rpm"));
     assert_eq!(csv.lines().count(), 3, "{csv}"); // header + 2 speeds
     assert!(image::open(out.path().join("study.png")).is_ok());
+    // The data panes' exports: one CSV row per compared cycle (20 in the
+    // log's truth file), per inspected image (40), and the annotated image.
+    let cycles = std::fs::read_to_string(out.path().join("overlay-cycles.csv")).unwrap();
+    assert_eq!(cycles.lines().count(), 21, "{cycles}");
+    let items = std::fs::read_to_string(out.path().join("yield-items.csv")).unwrap();
+    assert_eq!(items.lines().count(), 41, "{items}");
+    assert!(image::open(out.path().join("yield.png")).is_ok());
+    let v = image::open(out.path().join("vision-h2x10-00.png")).unwrap();
+    assert_eq!((v.width(), v.height()), (1024, 768));
+    assert!(image::open(out.path().join("overlay-measured.png")).is_ok());
 }
 
 #[test]

@@ -228,10 +228,17 @@ fn background_work_shows_a_gauge_and_cancels() {
 fn signals_keys_zoom_pan_toggle() {
     let mut app = new_app();
     app.update(key(KeyCode::Char('2')));
+    // The demo's rig log: its channels, over its whole duration.
+    let full = app.session.signal_set(0).unwrap().t_range();
+    let first = app.session.signal_set(0).unwrap().channels[0].name.clone();
     app.update(key(KeyCode::Char('+')));
     app.update(key(KeyCode::Char('+')));
     let w = app.ui.signals.window.unwrap();
-    assert!(w[1] - w[0] < 0.04 && w[1] - w[0] > 0.03, "{w:?}");
+    let quarter = (full[1] - full[0]) / 4.0;
+    assert!(
+        ((w[1] - w[0]) - quarter).abs() < 1e-9 * quarter.max(1.0),
+        "{w:?} vs {full:?}"
+    );
     app.update(Msg::Key(KeyEvent::new(
         KeyCode::Char('L'),
         KeyModifiers::SHIFT,
@@ -240,8 +247,8 @@ fn signals_keys_zoom_pan_toggle() {
     assert!(w2[0] > w[0]);
     app.update(key(KeyCode::Char(']')));
     app.update(key(KeyCode::Char(' ')));
-    assert!(app.ui.signals.hidden.contains("stroke"));
-    assert!(screen(&app, 80, 24).contains("[ ] stroke"));
+    assert!(app.ui.signals.hidden.contains(&first));
+    assert!(screen(&app, 80, 24).contains(&format!("[ ] {first}")));
     app.update(key(KeyCode::Char('0')));
     assert!(app.ui.signals.window.is_none());
 }
@@ -287,7 +294,8 @@ fn an_opened_image_is_drawn_with_half_blocks_and_next_previous_work() {
         });
         img.save(dir.path().join(name)).unwrap();
     }
-    let mut app = new_app();
+    // A session without the demo's images.
+    let mut app = App::new(Session::new("images only"), 120, 40);
     app.update(Msg::Paste(dir.path().display().to_string()));
     run_jobs(&mut app);
     assert_eq!(app.session.images.len(), 2);
@@ -306,4 +314,68 @@ fn an_opened_image_is_drawn_with_half_blocks_and_next_previous_work() {
     let mut img = ImageCache::halfblocks();
     let s = buffer_text(&render_app(&app, 100, 30, &Theme::plain(), &mut img));
     assert!(s.contains("image hidden (NO_COLOR)"), "{s}");
+}
+
+/// The demo's data panes: Vision inspects the image shown on the worker,
+/// Yield runs the batch, Overlay compares the log with the model; every
+/// number on screen comes from those runs. Ground truth of the four demo
+/// images (fixtures/interop/images/*.json): one passes, three fail.
+#[test]
+fn vision_yield_and_overlay_run_on_the_worker_with_the_demo_data() {
+    let mut app = new_app();
+    app.update(key(KeyCode::Char('6')));
+    assert_eq!(app.running.len(), 1, "showing Vision queues the inspection");
+    assert!(screen(&app, 120, 40).contains("inspecting…"));
+    run_jobs(&mut app);
+    let s = screen(&app, 120, 40);
+    assert!(s.contains("verdict: FAIL"), "{s}");
+    assert!(
+        s.contains("HDR-2x10-2.54 (recognised among 4 recipes"),
+        "{s}"
+    );
+    assert!(s.contains("Pins (20)"), "{s}");
+    // Next image: round pins, a pass in the ground truth.
+    app.update(key(KeyCode::Char('n')));
+    run_jobs(&mut app);
+    let s = screen(&app, 120, 40);
+    assert!(s.contains("r1x8-00.jpg (2/4)"), "{s}");
+    assert!(s.contains("verdict: PASS"), "{s}");
+    // Yield: the batch over the four images.
+    app.update(key(KeyCode::Char('7')));
+    assert!(app.running.iter().any(|r| r.label.contains("yield")));
+    run_jobs(&mut app);
+    let y = &app.session.yields.as_ref().unwrap().report;
+    assert_eq!((y.passed, y.failed, y.errors), (1, 3, 0));
+    let s = screen(&app, 120, 40);
+    assert!(s.contains("yield 25.0 %"), "{s}");
+    assert!(s.contains("Wilson"), "{s}");
+    // Overlay: the log's 20 cycles against the predicted ensemble.
+    app.update(key(KeyCode::Char('3')));
+    assert!(app.running.iter().any(|r| r.label.contains("overlay")));
+    run_jobs(&mut app);
+    let s = screen(&app, 120, 40);
+    assert!(s.contains("envelope of 20 cycles"), "{s}");
+    assert!(s.contains("stroke residual"), "{s}");
+    app.update(key(KeyCode::Char('n')));
+    assert!(screen(&app, 120, 40).contains("stroke — cycle 0"));
+}
+
+/// Cancelling the yield keeps partial work out and does not restart it
+/// until asked (r).
+#[test]
+fn a_cancelled_yield_is_not_restarted_until_asked() {
+    let mut app = new_app();
+    app.update(key(KeyCode::Char('7')));
+    assert_eq!(app.running.len(), 1);
+    let (_, _, progress) = app.requests[0].clone();
+    app.update(key(KeyCode::Esc));
+    assert!(progress.is_cancelled());
+    assert!(app.running.is_empty());
+    let _ = app.take_requests();
+    app.update(key(KeyCode::Char('j')));
+    assert!(app.running.is_empty(), "not restarted by itself");
+    app.update(key(KeyCode::Char('r')));
+    assert_eq!(app.running.len(), 1);
+    run_jobs(&mut app);
+    assert!(app.session.yields.is_some());
 }

@@ -61,7 +61,7 @@ impl Tmux {
                     "-t",
                     "e2e",
                     "-F",
-                    "#{pane_dead} #{pane_dead_status}",
+                    "#{pane_dead} #{pane_dead_status}#{pane_dead_signal}",
                 ])
                 .stdout,
         )
@@ -122,18 +122,32 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     });
     t.wait_for("model: clearance level", 20.0);
     // Every pane by number, then Tab wraps around.
-    for (k, text) in [
-        ("2", "Channels"),
-        ("3", "Fidelity and figures"),
-        ("4", "Parameters — preset paper"),
-        ("5", "press r to run"),
-        ("6", "Vision"),
-        ("7", "Yield"),
-        ("8", "Methods"),
+    // The data panes show the demo's real data once the worker has run:
+    // the log's channels, its 20 cycles against the model, the first
+    // image's inspection (ground truth: fail, a damaged pin), the yield.
+    for (k, text, secs) in [
+        ("2", "displacement (mm)", 10.0),
+        ("3", "envelope of 20 cycles", 30.0),
+        ("4", "Parameters — preset paper", 10.0),
+        ("5", "press r to run", 10.0),
+        ("6", "verdict: FAIL", 30.0),
+        ("7", "Wilson", 30.0),
+        ("8", "Methods", 10.0),
     ] {
         t.keys(&[k]);
-        t.wait_for(text, 10.0);
+        t.wait_for(text, secs);
     }
+    t.keys(&["6"]);
+    let s = t.wait_for("damaged", 10.0);
+    assert!(s.contains("h2x10-01.jpg (1/4)"), "{s}");
+    t.keys(&["n"]);
+    let s = t.wait_for("verdict: PASS", 30.0);
+    assert!(s.contains("r1x8-00.jpg (2/4)"), "{s}");
+    t.keys(&["7"]);
+    t.wait_for("yield 25.0 %", 10.0);
+    t.keys(&["3", "n"]);
+    t.wait_for("stroke — cycle 0", 10.0);
+    t.keys(&["8"]);
     t.wait_for("Charts (", 30.0); // the quick methods lab ran in the background
     t.keys(&["Tab"]);
     t.wait_for("Metadata", 10.0);
@@ -168,14 +182,32 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     let s = t.wait_for("Load errors (1)", 20.0);
     assert!(s.contains("dropped.mcap"), "{s}");
     assert!(t.pane_state().starts_with('0'), "the TUI must still run");
+    // A corrupt log dropped on the terminal (bracketed paste of its path).
+    let bad = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/batch/corrupt.mcap");
+    t.cmd(&["set-buffer", "-b", "drop", &bad.display().to_string()]);
+    t.cmd(&["paste-buffer", "-p", "-b", "drop", "-t", "e2e"]);
+    let s = t.wait_for("Load errors (2)", 20.0);
+    assert!(s.contains("corrupt.mcap"), "{s}");
+    assert!(t.pane_state().starts_with('0'), "the TUI must still run");
     // Quit.
     t.keys(&["q"]);
     let start = Instant::now();
+    let mut dead_since: Option<Instant> = None;
     loop {
         let st = t.pane_state();
         if st.starts_with('1') {
-            assert_eq!(st, "1 0", "exit status");
-            break;
+            // An exit status (or a signal) once tmux has it: it must be 0.
+            if st.len() > 2 {
+                assert_eq!(st, "1 0", "exit status");
+                break;
+            }
+            // Some tmux runs mark the pane dead without ever filling in the
+            // status; the process has ended either way.
+            let since = *dead_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > Duration::from_secs(2) {
+                eprintln!("note: tmux reported the pane dead without an exit status");
+                break;
+            }
         }
         assert!(
             start.elapsed() < Duration::from_secs(10),

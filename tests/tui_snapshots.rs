@@ -20,6 +20,31 @@ fn shot(pane: PaneId, w: u16, h: u16) -> String {
     text
 }
 
+/// Vision on every demo image (top views of three parts, a side view).
+#[test]
+fn vision_every_demo_image() {
+    let mut s = session().clone();
+    for i in 0..s.images.len() {
+        s.inspect_now(i);
+    }
+    for i in 1..s.images.len() {
+        let mut ui = PaneState::new(120, 40);
+        ui.set_option("vision.image", &i.to_string()).unwrap();
+        insta::assert_snapshot!(
+            format!("vision_image_{i}"),
+            render_text(&s, PaneId::Vision, &ui)
+        );
+    }
+}
+
+/// Overlay of one cycle (not the envelope).
+#[test]
+fn overlay_one_cycle() {
+    let mut ui = PaneState::new(120, 40);
+    ui.set_option("overlay.cycle", "3").unwrap();
+    insta::assert_snapshot!(render_text(session(), PaneId::Overlay, &ui));
+}
+
 macro_rules! pane_snapshots {
     ($($name:ident => $pane:expr),* $(,)?) => {
         $(
@@ -54,12 +79,12 @@ fn study_by_speed_and_torque() {
 #[test]
 fn signals_zoomed_with_a_hidden_channel() {
     let mut ui = PaneState::new(120, 40);
-    ui.set_option("signals.t0", "0.04").unwrap();
-    ui.set_option("signals.t1", "0.06").unwrap();
-    ui.set_option("signals.cursor", "0.05").unwrap();
-    ui.set_option("signals.hide", "torque").unwrap();
+    ui.set_option("signals.t0", "0.4").unwrap();
+    ui.set_option("signals.t1", "0.5").unwrap();
+    ui.set_option("signals.cursor", "0.45").unwrap();
+    ui.set_option("signals.hide", "speed").unwrap();
     let text = render_text(session(), PaneId::Signals, &ui);
-    assert!(text.contains("[ ] torque"), "{text}");
-    assert!(text.contains("0.040–0.060 s"), "{text}");
+    assert!(text.contains("[ ] speed"), "{text}");
+    assert!(text.contains("0.400–0.500 s"), "{text}");
     insta::assert_snapshot!(text);
 }

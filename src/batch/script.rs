@@ -24,7 +24,7 @@
 //! study = { clearances_mm = [0.1, 0.5], speeds_rpm = [1200], materials = ["alloy_steel"], warmup = 1, revs = 1 }
 //!
 //! [[step]]
-//! kind = "run"                       # model | study | methods
+//! kind = "run"                       # model | study | methods | yield | overlay
 //! what = "model"
 //!
 //! [[step]]
@@ -44,8 +44,10 @@
 //! ```
 //!
 //! Panes that show the model (session, signals, overlay, model) run it
-//! first when the parameters changed since the last run; the study runs
-//! only when asked (it is the expensive one).
+//! first when the parameters changed since the last run; the Vision pane
+//! inspects its image, the Yield pane runs the batch yield and the Overlay
+//! pane compares its log with the model when they have not run yet; the
+//! study runs only when asked (it is the expensive one).
 
 use super::{Format, export, figure, parse_size};
 use crate::panes::session::{StudySetup, load_path};
@@ -519,7 +521,14 @@ impl Runner {
     fn run(&mut self, index: usize, t: &toml::Table) -> StepReport {
         let what = match str_of(t, "what") {
             Ok(Some(w)) => w.to_string(),
-            Ok(None) => return err(index, "run", "", "give `what` (model or study)"),
+            Ok(None) => {
+                return err(
+                    index,
+                    "run",
+                    "",
+                    "give `what` (model, study, methods, yield or overlay)",
+                );
+            }
             Err(e) => return err(index, "run", "", e),
         };
         match what.as_str() {
@@ -560,11 +569,60 @@ impl Runner {
                     format!("quick methods lab, {:.1} s", start.elapsed().as_secs_f64()),
                 )
             }
+            "yield" => {
+                self.session.run_yield_now();
+                match &self.session.yields {
+                    Some(y) => ok(
+                        index,
+                        "run",
+                        "yield",
+                        format!(
+                            "{} images: {} pass, {} fail, {} error(s), {:.0} ms",
+                            y.report.items,
+                            y.report.passed,
+                            y.report.failed,
+                            y.report.errors,
+                            y.wall_ms
+                        ),
+                    ),
+                    None => err(index, "run", "yield", "the yield did not run"),
+                }
+            }
+            "overlay" => {
+                if self.session.logs.is_empty() {
+                    return err(index, "run", "overlay", "no rig log loaded");
+                }
+                let mut msgs = Vec::new();
+                let mut failed = false;
+                for i in 0..self.session.logs.len() {
+                    self.session.run_overlay_now(i);
+                    if let Some(r) = self.session.overlay_of(i) {
+                        match &r.report {
+                            Ok(rep) => msgs.push(format!(
+                                "{}: {} cycles, stroke RMS {:.4} mm, {:.0} ms",
+                                self.session.logs[i].path,
+                                rep.run.cycles,
+                                rep.run.stroke_rms_err_mm,
+                                r.wall_ms
+                            )),
+                            Err(e) => {
+                                failed = true;
+                                msgs.push(e.clone());
+                            }
+                        }
+                    }
+                }
+                if failed {
+                    err(index, "run", "overlay", msgs.join("; "))
+                } else {
+                    ok(index, "run", "overlay", msgs.join("; "))
+                }
+            }
             other => err(
                 index,
                 "run",
                 other,
-                format!("cannot run `{other}` (allowed: model, study, methods)"),
+                format!("cannot run `{other}` (allowed: model, study, methods, yield, overlay)"),
             ),
         }
     }
@@ -600,6 +658,12 @@ impl Runner {
                 Ok(_) => note = Some("model run first".to_string()),
                 Err(e) => note = Some(format!("model run failed: {e}")),
             }
+        }
+        if let Some(ran) = self.session.prepare_pane(pane, &ui) {
+            note = Some(match note {
+                Some(n) => format!("{n}; {ran} first"),
+                None => format!("{ran} first"),
+            });
         }
         Ok((pane, ui, note))
     }

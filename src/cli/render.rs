@@ -92,6 +92,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         if pane == PaneId::Methods {
             session.run_methods_now();
         }
+        // The analyses of the data panes (the TUI runs them on its worker).
+        session.prepare_pane(pane, &ui);
         if pane == PaneId::Study {
             let progress = crate::progress::Progress::new(session.study_setup.grid.len() as u64);
             let _bar = crate::progress::ProgressBarGuard::start(progress.clone(), "study");
@@ -101,21 +103,26 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     }
     let view = panes::view(pane, &session, &ui);
-    match (&args.out, format) {
+    let mut stdout = std::io::stdout();
+    let written = match (&args.out, format) {
         (Some(path), f) => {
             let what = export(&session, &view, f, (w, h), path).map_err(|e| anyhow::anyhow!(e))?;
             eprintln!("wrote {} ({what})", path.display());
+            Ok(())
         }
         (None, Format::Png) => anyhow::bail!("--format png needs --out FILE"),
         (None, Format::Text) => {
-            std::io::stdout().write_all(render_view_text(&session, &view, w, h).as_bytes())?;
+            stdout.write_all(render_view_text(&session, &view, w, h).as_bytes())
         }
         (None, Format::Json) => {
-            println!("{}", serde_json::to_string_pretty(&view.to_json())?);
+            writeln!(stdout, "{}", serde_json::to_string_pretty(&view.to_json())?)
         }
-        (None, Format::Csv) => {
-            std::io::stdout().write_all(view.to_csv().as_bytes())?;
-        }
+        (None, Format::Csv) => stdout.write_all(view.to_csv().as_bytes()),
+    };
+    // A closed pipe (`| head`) is the reader's choice, not an error.
+    match written {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => return Err(e.into()),
+        _ => {}
     }
     Ok(ExitCode::SUCCESS)
 }

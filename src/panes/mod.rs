@@ -17,6 +17,7 @@
 //! | Yield | [`yields`] | batch yield, confidence interval, Pareto, worst pins |
 //! | Methods | [`methods`] | work–precision and stability charts |
 
+pub mod analysis;
 pub mod chart;
 pub mod demo;
 pub mod methods;
@@ -181,6 +182,7 @@ pub const UI_OPTIONS: &[&str] = &[
     "study.quantity",
     "vision.image",
     "vision.pin",
+    "yield.selected",
     "methods.chart",
 ];
 

@@ -2,9 +2,15 @@
 //! chosen cycle (or the envelope of all cycles), the residual beneath, the
 //! per-cycle figures, and the fidelity level in use and why.
 //!
-//! Measured data needs a rig log and the `pinsight::overlay` module; until
-//! both are in the session the pane shows the prediction alone and says
-//! what is missing.
+//! With a rig log loaded, the comparison is `pinsight::overlay::compare::
+//! overlay` (run on the worker, [`super::analysis::run_overlay`]): the
+//! model at the clearance level with the log's metadata predicts an
+//! ensemble of revolutions at the logged speed (the motion in a worn joint
+//! is chaotic, so it is compared as bands, not impact for impact). Charts:
+//! the ideal stroke, the predicted min–max band and mean, the measured cycle
+//! (or the measured envelope of all cycles); the residual (measured −
+//! predicted mean) beneath. Without a log the pane shows the model's
+//! prediction alone and says so.
 
 use super::chart::{ChartView, SeriesKind, SeriesView, decimate_points};
 use super::session::Session;
@@ -63,6 +69,13 @@ pub struct OverlayView {
     pub level: Option<String>,
     pub level_reason: Option<String>,
     pub message: Option<String>,
+    /// Where the model parameters came from, laser zero, noise (JSON only).
+    pub notes: Vec<String>,
+    /// The run's residual figures (the library's `RunResiduals`: stroke and
+    /// force RMS residuals, fractions inside the predicted band), for checks.
+    pub residuals: Option<crate::overlay::compare::RunResiduals>,
+    /// Time the comparison took (JSON only: not drawn, so screens are stable).
+    pub wall_ms: Option<f64>,
 }
 
 impl OverlayView {
@@ -104,6 +117,214 @@ impl OverlayView {
 }
 
 pub fn view(s: &Session, ui: &PaneState) -> OverlayView {
+    if !s.logs.is_empty() {
+        return measured_view(s, ui);
+    }
+    prediction_view(s, ui)
+}
+
+/// Points of a grid curve (degrees) decimated to the chart's columns.
+fn grid_points(deg: &[f64], y: &[f64], cols: usize) -> Vec<(f64, f64)> {
+    let pts: Vec<(f64, f64)> = deg
+        .iter()
+        .zip(y)
+        .map(|(&x, &v)| {
+            if v.is_finite() {
+                (x, v)
+            } else {
+                (f64::NAN, f64::NAN)
+            }
+        })
+        .collect();
+    decimate_points(&pts, 0.0, 360.0, cols)
+}
+
+fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
+    let cols = ui.chart_columns(0.6);
+    let li = ui.overlay.log.min(s.logs.len().saturating_sub(1));
+    let log = &s.logs[li];
+    let mut v = OverlayView {
+        source: Some(log.path.clone()),
+        showing: "envelope".into(),
+        stroke: None,
+        force: None,
+        residual: None,
+        cycles: Vec::new(),
+        selected: None,
+        figures: Vec::new(),
+        level: None,
+        level_reason: None,
+        message: None,
+        notes: Vec::new(),
+        wall_ms: None,
+        residuals: None,
+    };
+    let Some(run) = s.overlay_of(li) else {
+        v.message = Some(format!(
+            "comparing {} with the model… (runs in the background)",
+            log.path
+        ));
+        return v;
+    };
+    let r = match &run.report {
+        Ok(r) => r,
+        Err(e) => {
+            v.message = Some(format!("no comparison: {e}"));
+            return v;
+        }
+    };
+    v.level = Some(r.level.clone());
+    let revs: usize = r.groups.iter().map(|g| g.prediction.revs).sum();
+    v.level_reason = Some(format!(
+        "c = {} mm, standoff {} mm (log metadata); chaotic joint motion: {} predicted revolutions form a band ({})",
+        r.clearance_mm,
+        r.standoff_mm,
+        revs,
+        r.groups
+            .iter()
+            .map(|g| format!("{:.0} rpm × {} cycles", g.motor_rpm, g.cycles))
+            .collect::<Vec<_>>()
+            .join(", "),
+    ));
+    v.notes = r.params_notes.iter().chain(&r.notes).cloned().collect();
+    v.wall_ms = Some(run.wall_ms);
+    let deg = &r.grid_deg;
+    let nc = r.cycles.len();
+    let sel = ui.overlay.cycle.map(|c| c.min(nc.saturating_sub(1)));
+    v.selected = sel;
+    // Measured stroke of the selected cycle (the comparison's laser zero).
+    let Some((_, cs)) = &log.rig else {
+        v.message = Some("no cycles to compare".into());
+        return v;
+    };
+    let shift = r.laser_zero.applied - cs.offsets.laser_zero_mm.applied;
+    let chosen = sel.and_then(|i| r.cycles.get(i));
+    let (pred_s, pred_f) = match chosen.and_then(|c| r.groups.get(c.group)) {
+        Some(g) => (&g.prediction.stroke, &g.prediction.force),
+        None => (&r.predicted_stroke, &r.predicted_force),
+    };
+    let line = |name: &str, y: &[f64], color: usize, kind| SeriesView {
+        name: name.into(),
+        color,
+        kind,
+        points: grid_points(deg, y, cols),
+    };
+    let mut stroke = vec![
+        line("ideal", &r.ideal_stroke_mm, 8, SeriesKind::Reference),
+        line("predicted min", &pred_s.min, 4, SeriesKind::Reference),
+        line("predicted max", &pred_s.max, 4, SeriesKind::Reference),
+        line("predicted mean", &pred_s.mean, 1, SeriesKind::Line),
+    ];
+    let mut force = vec![
+        line("predicted min", &pred_f.min, 4, SeriesKind::Reference),
+        line("predicted max", &pred_f.max, 4, SeriesKind::Reference),
+        line("predicted mean", &pred_f.mean, 1, SeriesKind::Line),
+    ];
+    let residual: Vec<f64>;
+    match chosen.and_then(|c| cs.cycles.iter().find(|x| x.index == c.index)) {
+        Some(c) => {
+            v.showing = format!("cycle {}", c.index);
+            let ms: Vec<f64> = c.stroke_mm.iter().map(|x| x + shift).collect();
+            residual = ms.iter().zip(&pred_s.mean).map(|(a, b)| a - b).collect();
+            stroke.push(line("measured", &ms, 3, SeriesKind::Line));
+            if !c.force_n.is_empty() {
+                force.push(line("measured", &c.force_n, 3, SeriesKind::Line));
+            }
+        }
+        None => {
+            v.showing = format!("envelope of {nc} cycles");
+            stroke.push(line(
+                "measured min",
+                &r.measured_stroke.min,
+                3,
+                SeriesKind::Line,
+            ));
+            stroke.push(line(
+                "measured max",
+                &r.measured_stroke.max,
+                3,
+                SeriesKind::Line,
+            ));
+            force.push(line(
+                "measured min",
+                &r.measured_force.min,
+                3,
+                SeriesKind::Line,
+            ));
+            force.push(line(
+                "measured max",
+                &r.measured_force.max,
+                3,
+                SeriesKind::Line,
+            ));
+            residual = r.residual_stroke_mm.clone();
+        }
+    }
+    v.stroke = Some(ChartView::new(
+        format!("stroke — {}", v.showing),
+        "crank angle from TDC (°)",
+        "mm",
+        stroke,
+        Some([0.0, 360.0]),
+    ));
+    if r.measured_force.mean.iter().any(|x| x.is_finite()) {
+        v.force = Some(ChartView::new(
+            format!("load-cell force — {}", v.showing),
+            "crank angle from TDC (°)",
+            "N",
+            force,
+            Some([0.0, 360.0]),
+        ));
+    }
+    let noise = r.noise_stroke_mm;
+    let band: Vec<f64> = deg.iter().map(|_| 2.0 * noise).collect();
+    let neg: Vec<f64> = band.iter().map(|x| -x).collect();
+    v.residual = Some(ChartView::new(
+        format!(
+            "stroke residual (measured − predicted mean) — {}",
+            v.showing
+        ),
+        "crank angle from TDC (°)",
+        "mm",
+        vec![
+            line("+2σ noise", &band, 8, SeriesKind::Reference),
+            line("−2σ noise", &neg, 8, SeriesKind::Reference),
+            line("residual", &residual, 3, SeriesKind::Line),
+        ],
+        Some([0.0, 360.0]),
+    ));
+    v.cycles = r
+        .cycles
+        .iter()
+        .map(|c| CycleRow {
+            index: c.index,
+            stroke_rms_mm: Some(c.stroke_rms_err_mm).filter(|x| x.is_finite()),
+            force_rms_n: Some(c.force_rms_err_n).filter(|x| x.is_finite()),
+            stroke_max_mm: Some(c.stroke_max_err_mm).filter(|x| x.is_finite()),
+            force_max_n: None,
+            note: format!(
+                "{:.0}% in band, {:.0} rpm",
+                100.0 * c.stroke_in_band,
+                c.motor_rpm
+            ),
+        })
+        .collect();
+    let run_r = &r.run;
+    v.residuals = Some(run_r.clone());
+    v.figures = vec![
+        ("cycles compared".into(), run_r.cycles as f64),
+        ("stroke RMS residual mm".into(), run_r.stroke_rms_err_mm),
+        ("mean-curve RMS mm".into(), run_r.stroke_mean_rms_mm),
+        ("stroke in band".into(), run_r.stroke_in_band),
+        ("force RMS residual N".into(), run_r.force_rms_err_n),
+        ("force in band".into(), run_r.force_in_band),
+        ("laser noise mm".into(), r.noise_stroke_mm),
+    ];
+    v.figures.retain(|(_, x)| x.is_finite());
+    v
+}
+
+fn prediction_view(s: &Session, ui: &PaneState) -> OverlayView {
     let cols = ui.chart_columns(0.6);
     let run = s.model.as_ref();
     let mut v = OverlayView {
@@ -118,13 +339,12 @@ pub fn view(s: &Session, ui: &PaneState) -> OverlayView {
         level: run.map(|r| r.level.name().to_string()),
         level_reason: run.map(|r| r.level_reason.clone()),
         message: None,
+        notes: Vec::new(),
+        wall_ms: None,
+        residuals: None,
     };
-    let mut missing = Vec::new();
-    if s.logs.is_empty() {
-        missing.push("no rig log loaded (open a .mcap log with o)");
-    }
-    missing.push("measured-vs-predicted comparison needs the overlay module (not on main yet)");
-    v.message = Some(format!("prediction only: {}", missing.join("; ")));
+    v.message =
+        Some("prediction only: no rig log loaded (open a .mcap log with o to compare)".into());
     if let Some(r) = run {
         if let Some(c) = &r.result.curves {
             // The last reported revolution against crank angle.

@@ -14,12 +14,16 @@
 //! taking a [`Progress`] for a gauge and cancellation; their results enter
 //! the session through [`Session::set_model_run`] / [`Session::set_study`].
 
+use crate::model::kinematics::Geometry;
 use crate::model::params::Params;
 use crate::progress::Progress;
+use crate::rig::cycles::{CycleOptions, CycleSet, analyse};
+use crate::rig::{LoadOptions, LoadStatus, RigLog, Severity};
 use crate::sim::fidelity::{FidelityReport, SceneResolution, assess};
 use crate::sim::sweep::{SweepGrid, SweepResult, run_sweep};
 use crate::sim::{Level, LevelChoice, SimOptions, SimResult, simulate};
 use crate::solver::Method;
+use crate::vision::batch::ItemMeta;
 use serde::Serialize;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -163,22 +167,24 @@ impl SignalSet {
     }
 }
 
-/// A loaded rig log.
+/// A loaded rig log: the channels as the Signals pane draws them and the
+/// library's plain data ([`crate::rig::RigLog`] and its [`CycleSet`], for
+/// the Overlay pane; None for a synthetic set of channels).
 #[derive(Debug, Clone)]
 pub struct LogEntry {
     pub path: String,
     pub signals: SignalSet,
+    pub rig: Option<(Arc<RigLog>, Arc<CycleSet>)>,
 }
 
-/// A recipe file (kept as text and its key fields until the vision module
-/// parses it).
+/// A vision recipe (from a file or a log's attachment), parsed and validated.
 #[derive(Debug, Clone, Serialize)]
 pub struct RecipeEntry {
     pub path: String,
     pub part_number: String,
     pub view: String,
     #[serde(skip)]
-    pub text: String,
+    pub recipe: crate::vision::Recipe,
 }
 
 /// Where an image's bytes are.
@@ -186,7 +192,7 @@ pub struct RecipeEntry {
 pub enum ImageSource {
     File(PathBuf),
     /// Embedded (demo) or extracted from a rig log.
-    Bytes(Arc<[u8]>),
+    Bytes(Arc<Vec<u8>>),
 }
 
 /// A connector image.
@@ -198,6 +204,8 @@ pub struct ImageEntry {
     pub height: u32,
     /// The decoded image, for display (kept small: at most 1024 px wide).
     pub preview: Option<Arc<image::RgbImage>>,
+    /// Where it came from (part number, lot, speed, cycle of a rig log's image).
+    pub meta: ItemMeta,
 }
 
 /// The latest model run: what was run and what came out.
@@ -257,6 +265,12 @@ pub struct Session {
     /// The methods lab (quick effort), once run.
     pub methods: Option<crate::methods::dynamics::DynamicsLab>,
     pub methods_error: Option<String>,
+    /// Vision inspections by image index (run on demand: the image shown).
+    pub inspections: std::collections::BTreeMap<usize, super::analysis::Inspected>,
+    /// The batch yield over every image (None: not run, or images changed since).
+    pub yields: Option<super::analysis::YieldRun>,
+    /// Measured-vs-predicted comparisons by log index.
+    pub overlays: std::collections::BTreeMap<usize, super::analysis::OverlayRun>,
 }
 
 impl Default for Session {
@@ -285,6 +299,9 @@ impl Session {
             display: None,
             methods: None,
             methods_error: None,
+            inspections: Default::default(),
+            yields: None,
+            overlays: Default::default(),
         }
     }
 
@@ -321,11 +338,15 @@ impl Session {
                 }
                 Loaded::Recipe(e, r) => {
                     self.files.push(e);
-                    self.recipes.push(r);
+                    self.recipes.push(*r);
+                    // Another recipe can change which one an image gets.
+                    self.inspections.clear();
+                    self.yields = None;
                 }
                 Loaded::Image(e, img) => {
                     self.files.push(e);
                     self.images.push(*img);
+                    self.yields = None;
                 }
             }
         }
@@ -450,7 +471,7 @@ pub enum Loaded {
     Entry(FileEntry),
     Params(FileEntry, Box<Params>),
     Log(FileEntry, Box<LogEntry>),
-    Recipe(FileEntry, RecipeEntry),
+    Recipe(FileEntry, Box<RecipeEntry>),
     Image(FileEntry, Box<ImageEntry>),
 }
 
@@ -546,7 +567,7 @@ fn load_file(path: &Path, progress: &Progress) -> Vec<Loaded> {
     let shown = path.display().to_string();
     let ext = ext_of(path);
     match ext.as_str() {
-        "mcap" => vec![load_log(path, progress)],
+        "mcap" => load_log(path, progress),
         e if IMAGE_EXTS.contains(&e) => match std::fs::read(path) {
             Ok(bytes) => vec![load_image_bytes(
                 &shown,
@@ -581,16 +602,245 @@ fn load_file(path: &Path, progress: &Progress) -> Vec<Loaded> {
     }
 }
 
-/// A rig log. Until `pinsight::rig` is on main this records that rig logs
-/// cannot be read yet.
-fn load_log(path: &Path, _progress: &Progress) -> Loaded {
+/// A rig log, through [`crate::rig::load`] (crash-proof on corrupt files:
+/// a file that cannot be read as MCAP at all becomes an error entry; a
+/// partial file loads what it can and says what it lost). Its cycles are
+/// analysed at once ([`crate::rig::cycles::analyse`], preset `paper`
+/// geometry), its camera images become image entries, its attached recipes
+/// recipe entries.
+fn load_log(path: &Path, progress: &Progress) -> Vec<Loaded> {
     let shown = path.display().to_string();
-    Loaded::Entry(entry(
-        &shown,
-        FileKind::RigLog,
-        FileStatus::Error("rig logs cannot be read yet: the rig module is not on main".into()),
-        "",
-    ))
+    progress.set_message(format!("reading {shown}"));
+    match crate::rig::load(path, &LoadOptions::default(), progress) {
+        Ok(log) => log_items(&shown, log, Some(path)),
+        Err(e) => vec![Loaded::Entry(entry(
+            &shown,
+            FileKind::RigLog,
+            FileStatus::Error(one_line(&strip_file(&e.to_string(), &shown))),
+            "",
+        ))],
+    }
+}
+
+/// A rig log held in memory (the embedded demo log).
+pub fn load_log_bytes(name: &str, bytes: &[u8]) -> Vec<Loaded> {
+    let src = crate::rig::mcap_read::Source::from_vec(name, bytes.to_vec());
+    match crate::rig::load_source(&src, &LoadOptions::default(), &Progress::hidden()) {
+        Ok(log) => log_items(name, log, None),
+        Err(e) => vec![Loaded::Entry(entry(
+            name,
+            FileKind::RigLog,
+            FileStatus::Error(one_line(&e.to_string())),
+            "",
+        ))],
+    }
+}
+
+/// Signals pane names of the rig signals.
+fn channel_name(k: crate::rig::SignalKind) -> &'static str {
+    use crate::rig::SignalKind as K;
+    match k {
+        K::Angle => "angle",
+        K::Speed => "speed",
+        K::Force => "force",
+        K::Displacement => "displacement",
+        K::Cycle => "cycle",
+    }
+}
+
+/// The entries of a loaded log: the log itself (status from its load
+/// report and cycle findings), its images (decoded from `path` when the
+/// log is a file), its attached recipes.
+fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
+    let mut out = Vec::new();
+    let copts = CycleOptions {
+        geometry: Geometry::of(&Params::paper()),
+        ..CycleOptions::default()
+    };
+    let cycles = analyse(&log, &copts);
+    let t0 = log.log_start_ns.unwrap_or(0);
+    let secs = |t: i64| (t - t0) as f64 * 1e-9;
+    let mut channels = Vec::new();
+    for k in crate::rig::SignalKind::ALL {
+        if k == crate::rig::SignalKind::Cycle {
+            continue; // shown as cycle markers
+        }
+        if let Some(sig) = log.signals.get(k) {
+            channels.push(Channel::new(
+                channel_name(k),
+                sig.unit.clone(),
+                sig.t_ns.iter().map(|&t| secs(t)).collect(),
+                sig.values.clone(),
+            ));
+        }
+    }
+    let cycle_marks: Vec<(f64, u64)> = cycles
+        .cycles
+        .iter()
+        .map(|c| (secs(c.t_start_ns), c.index))
+        .collect();
+    let m = &log.meta;
+    let mut meta: Vec<(String, String)> = Vec::new();
+    let mut put = |k: &str, v: Option<String>| {
+        if let Some(v) = v {
+            meta.push((k.to_string(), v));
+        }
+    };
+    put("rig", m.rig_id.clone());
+    put("lot", m.lot.clone());
+    put("part", m.part_number.clone());
+    put("clearance", m.clearance_mm.map(|c| format!("{c} mm")));
+    put("speed", m.motor_rpm.map(|r| format!("{r} rpm")));
+    put("material", m.material.clone());
+    put("standoff", m.standoff_mm.map(|c| format!("{c} mm")));
+    put("gear ratio", m.gear_ratio.map(|g| g.to_string()));
+    put(
+        "cycles",
+        Some(format!(
+            "{} ({} usable), {}",
+            cycles.cycles.len(),
+            cycles.usable().count(),
+            match cycles.source {
+                crate::rig::cycles::CycleSource::Marks => "from the cycle marks",
+                crate::rig::cycles::CycleSource::Angle => "from the crank angle",
+                crate::rig::cycles::CycleSource::None => "no crank angle",
+            }
+        )),
+    );
+    if cycles.crank.motor_rpm_mean.is_finite() && cycles.crank.motor_rpm_mean > 0.0 {
+        put(
+            "measured speed",
+            Some(format!("{:.1} rpm", cycles.crank.motor_rpm_mean)),
+        );
+    }
+    // Findings worth a technician's attention, per channel: the entry's
+    // message lists them; the status is the worst of load and cycles.
+    let findings: Vec<&crate::rig::Finding> = log
+        .report
+        .findings
+        .iter()
+        .chain(cycles.findings.iter())
+        .filter(|f| f.severity >= Severity::Warning)
+        .collect();
+    let worst = findings.iter().map(|f| f.severity).max();
+    let listed: Vec<String> = findings
+        .iter()
+        .map(|f| {
+            let m = one_line(&strip_file(&f.message, &log.file));
+            match f.channel.as_deref() {
+                Some(ch) if !m.starts_with(ch) => format!("{ch}: {m}"),
+                _ => m,
+            }
+        })
+        .collect();
+    let status = match (log.report.status, worst) {
+        (LoadStatus::Error, _) => FileStatus::Error(if listed.is_empty() {
+            "nothing usable in the log".into()
+        } else {
+            listed.join(FINDING_SEP)
+        }),
+        (_, Some(Severity::DataLoss | Severity::Error)) => {
+            FileStatus::Warning(format!("partial: {}", listed.join(FINDING_SEP)))
+        }
+        (_, Some(_)) => FileStatus::Warning(listed.join(FINDING_SEP)),
+        (_, None) => FileStatus::Loaded,
+    };
+    let detail = format!(
+        "{:.2} s, {} channels, {} cycles, {} images, {}",
+        log.duration_s(),
+        channels.len(),
+        cycles.cycles.len(),
+        log.images.len(),
+        log.report.status.as_str()
+    );
+    let source = format!(
+        "rig log {shown}{}",
+        m.rig_id
+            .as_ref()
+            .map(|r| format!(" (rig {r})"))
+            .unwrap_or_default()
+    );
+    let usable = !status.is_error();
+    let item_meta = ItemMeta {
+        lot: m.lot.clone(),
+        part_number: m.part_number.clone(),
+        rig_id: m.rig_id.clone(),
+        motor_rpm: m.motor_rpm,
+        clearance_mm: m.clearance_mm,
+        cycle: None,
+        log: Some(shown.to_string()),
+    };
+    let image_refs = log.images.clone();
+    let attachments: Vec<(String, String)> = log
+        .attachments
+        .iter()
+        .filter(|a| a.kind == crate::rig::load::AttachmentKind::Recipe)
+        .filter_map(|a| a.text.clone().map(|t| (a.name.clone(), t)))
+        .collect();
+    let e = entry(shown, FileKind::RigLog, status, detail);
+    if usable {
+        out.push(Loaded::Log(
+            e,
+            Box::new(LogEntry {
+                path: shown.to_string(),
+                signals: SignalSet {
+                    source,
+                    channels,
+                    cycles: cycle_marks,
+                    meta,
+                },
+                rig: Some((Arc::new(log), Arc::new(cycles))),
+            }),
+        ));
+    } else {
+        out.push(Loaded::Entry(e));
+    }
+    for (name, text) in attachments {
+        out.push(load_toml_text(&format!("{shown}#{name}"), &text));
+    }
+    for (i, r) in image_refs.iter().enumerate() {
+        let name = match r.cycle {
+            Some(c) => format!("{shown}#cycle-{c}"),
+            None => format!("{shown}#{i}"),
+        };
+        let meta = ItemMeta {
+            cycle: r.cycle,
+            ..item_meta.clone()
+        };
+        let read = match path {
+            Some(p) => crate::rig::images::read_image(p, r).map_err(|e| one_line(&e.to_string())),
+            None => Err("images of an in-memory log are not decoded".to_string()),
+        };
+        match read {
+            Ok(img) => {
+                let bytes = Arc::new(img.data);
+                let mut l = load_image_bytes(&name, ImageSource::Bytes(bytes.clone()), &bytes);
+                if let Loaded::Image(_, e) = &mut l {
+                    e.meta = meta;
+                }
+                out.push(l);
+            }
+            Err(m) => out.push(Loaded::Entry(entry(
+                &name,
+                FileKind::Image,
+                FileStatus::Error(m),
+                "",
+            ))),
+        }
+    }
+    out
+}
+
+/// Separates a log's findings in its entry's message (one finding may hold
+/// semicolons of its own).
+pub const FINDING_SEP: &str = " | ";
+
+/// A finding's message without the file name it starts with (the Session
+/// pane lists it under the file already).
+fn strip_file(msg: &str, file: &str) -> String {
+    msg.strip_prefix(file)
+        .map(|r| r.trim_start_matches([':', ' ']).to_string())
+        .unwrap_or_else(|| msg.to_string())
 }
 
 /// Decodes an image (bytes from a file, the demo or a log) into an entry
@@ -618,6 +868,7 @@ pub fn load_image_bytes(name: &str, source: ImageSource, bytes: &[u8]) -> Loaded
                     width: w,
                     height: h,
                     preview: Some(Arc::new(preview.to_rgb8())),
+                    meta: ItemMeta::default(),
                 }),
             )
         }
@@ -659,27 +910,31 @@ pub fn load_toml_text(name: &str, text: &str) -> Loaded {
         ));
     }
     if table.contains_key("part_number") || table.contains_key("view") {
-        let part = table.get("part_number").and_then(|v| v.as_str());
-        let view = table.get("view").and_then(|v| v.as_str());
-        return match (part, view) {
-            (Some(p), Some(v)) => Loaded::Recipe(
-                entry(
-                    name,
-                    FileKind::Recipe,
-                    FileStatus::Loaded,
-                    format!("part {p}, {v} view"),
-                ),
-                RecipeEntry {
-                    path: name.to_string(),
-                    part_number: p.to_string(),
-                    view: v.to_string(),
-                    text: text.to_string(),
-                },
-            ),
-            _ => Loaded::Entry(entry(
+        return match crate::vision::Recipe::from_toml_str(text, name) {
+            Ok(r) => {
+                let view = format!("{:?}", r.view).to_ascii_lowercase();
+                Loaded::Recipe(
+                    entry(
+                        name,
+                        FileKind::Recipe,
+                        FileStatus::Loaded,
+                        format!(
+                            "part {}, {view} view, {}×{} pins",
+                            r.part_number, r.rows, r.cols
+                        ),
+                    ),
+                    Box::new(RecipeEntry {
+                        path: name.to_string(),
+                        part_number: r.part_number.clone(),
+                        view,
+                        recipe: r,
+                    }),
+                )
+            }
+            Err(e) => Loaded::Entry(entry(
                 name,
                 FileKind::Recipe,
-                FileStatus::Error("a recipe needs both `part_number` and `view` as strings".into()),
+                FileStatus::Error(one_line(&e.msg)),
                 "",
             )),
         };
@@ -785,10 +1040,14 @@ mod tests {
 
     #[test]
     fn toml_kinds_are_told_apart_and_errors_name_the_problem() {
-        match load_toml_text("r.toml", "part_number = \"HDR\"\nview = \"top\"\nrows = 2") {
+        let recipe = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/vision/hdr-2x10.toml"),
+        )
+        .unwrap();
+        match load_toml_text("r.toml", &recipe) {
             Loaded::Recipe(e, r) => {
                 assert_eq!(e.kind, FileKind::Recipe);
-                assert_eq!(r.part_number, "HDR");
+                assert_eq!(r.part_number, "HDR-2x10-2.54");
             }
             other => panic!("{other:?}"),
         }

@@ -52,6 +52,9 @@ pub struct App {
     pub requests: Vec<(u64, JobRequest, Arc<Progress>)>,
     next_id: u64,
     pub quit: bool,
+    /// Background analyses the user cancelled: not restarted by themselves
+    /// until asked (`r`) or the subject changes.
+    suppressed: Vec<JobKind>,
 }
 
 impl App {
@@ -69,11 +72,79 @@ impl App {
             requests: Vec::new(),
             next_id: 1,
             quit: false,
+            suppressed: Vec::new(),
         };
         if app.session.model.is_none() {
             app.start_model();
         }
         app
+    }
+
+    fn is_running(&self, kind: JobKind) -> bool {
+        self.running.iter().any(|r| r.kind == kind)
+    }
+
+    /// Starts the analysis the current pane needs and does not have yet:
+    /// the inspection of the Vision pane's image, the batch yield, the
+    /// overlay of the log shown. Called after every update, so a pane
+    /// shows real results as soon as the worker has them; the first frame
+    /// never waits for them.
+    pub fn schedule(&mut self) {
+        match self.pane {
+            PaneId::Vision if !self.session.images.is_empty() => {
+                let n = self.session.images.len();
+                let i = self.ui.vision.image.min(n - 1);
+                if self.session.inspection(i).is_none()
+                    && !self.is_running(JobKind::Inspect)
+                    && !self.suppressed.contains(&JobKind::Inspect)
+                {
+                    self.start_inspect(i);
+                }
+            }
+            PaneId::Yield
+                if !self.session.images.is_empty()
+                    && self.session.yields.is_none()
+                    && !self.is_running(JobKind::Yield)
+                    && !self.suppressed.contains(&JobKind::Yield) =>
+            {
+                self.start_yield();
+            }
+            PaneId::Overlay if !self.session.logs.is_empty() => {
+                let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
+                if self.session.overlay_of(i).is_none()
+                    && !self.is_running(JobKind::Overlay)
+                    && !self.suppressed.contains(&JobKind::Overlay)
+                {
+                    self.start_overlay(i);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    pub fn start_inspect(&mut self, index: usize) {
+        if let Some(img) = self.session.images.get(index) {
+            self.start(JobRequest::Inspect {
+                index,
+                image: Box::new(img.clone()),
+                book: self.session.recipe_book(),
+            });
+        }
+    }
+
+    pub fn start_yield(&mut self) {
+        self.start(JobRequest::Yield {
+            images: self.session.images.clone(),
+            book: self.session.recipe_book(),
+        });
+    }
+
+    pub fn start_overlay(&mut self, index: usize) {
+        match self.session.logs.get(index).map(|l| l.rig.clone()) {
+            Some(Some((log, cycles))) => self.start(JobRequest::Overlay { index, log, cycles }),
+            Some(None) => self.session.run_overlay_now(index), // records why not
+            None => {}
+        }
     }
 
     /// The current pane's view.
@@ -117,6 +188,7 @@ impl App {
     /// cancelled and its result will be ignored.
     pub fn start(&mut self, req: JobRequest) {
         let kind = req.kind();
+        self.suppressed.retain(|k| *k != kind);
         if kind != JobKind::Load {
             for r in self.running.iter().filter(|r| r.kind == kind) {
                 r.progress.cancel();
@@ -167,6 +239,9 @@ impl App {
         }
         for r in &self.running {
             r.progress.cancel();
+            if matches!(r.kind, JobKind::Inspect | JobKind::Yield | JobKind::Overlay) {
+                self.suppressed.push(r.kind);
+            }
         }
         let names: Vec<String> = self.running.iter().map(|r| r.label.clone()).collect();
         self.running.clear();
@@ -175,6 +250,11 @@ impl App {
 
     /// Handles one message.
     pub fn update(&mut self, msg: Msg) {
+        self.update_inner(msg);
+        self.schedule();
+    }
+
+    fn update_inner(&mut self, msg: Msg) {
         match msg {
             Msg::Key(k) => {
                 if k.kind == KeyEventKind::Press || k.kind == KeyEventKind::Repeat {
@@ -254,6 +334,35 @@ impl App {
                     self.session.methods_error = None;
                     self.message = Some(("methods lab done".into(), false));
                 }
+            }
+            JobOutput::Inspected(r) => {
+                if let Some(e) = &r.result.error {
+                    self.message = Some((format!("{}: {}", r.result.name, e.message), true));
+                }
+                self.session.set_inspection(*r);
+            }
+            JobOutput::Yield(r) => {
+                let rep = &r.report;
+                self.message = Some((
+                    format!(
+                        "yield {}: {} of {} connectors pass, {} error(s), {:.1} s",
+                        rep.yield_frac
+                            .map(|y| format!("{:.1} %", 100.0 * y))
+                            .unwrap_or_else(|| "–".into()),
+                        rep.passed,
+                        rep.inspected,
+                        rep.errors,
+                        r.wall_ms / 1e3
+                    ),
+                    false,
+                ));
+                self.session.set_yield(*r);
+            }
+            JobOutput::Overlay(r) => {
+                if let Err(e) = &r.report {
+                    self.message = Some((format!("overlay: {e}"), true));
+                }
+                self.session.set_overlay(*r);
             }
             JobOutput::Failed(e) => {
                 if job.kind == JobKind::Methods {
@@ -486,10 +595,17 @@ impl App {
                 self.ui.signals.selected = step(self.ui.signals.selected, n);
             }
             PaneId::Vision => {
-                self.ui.vision.pin = (self.ui.vision.pin as i64 + d).max(0) as usize;
+                let n = self.session.images.len();
+                let pins = (n > 0)
+                    .then(|| self.ui.vision.image.min(n - 1))
+                    .and_then(|i| self.session.inspection(i))
+                    .and_then(|r| r.result.inspection.as_ref())
+                    .map_or(0, |i| i.pins.len());
+                self.ui.vision.pin = step(self.ui.vision.pin, pins);
             }
             PaneId::Yield => {
-                self.ui.yields.selected = (self.ui.yields.selected as i64 + d).max(0) as usize;
+                let n = self.session.yields.as_ref().map_or(0, |y| y.results.len());
+                self.ui.yields.selected = step(self.ui.yields.selected, n);
             }
             PaneId::Methods => {
                 let n = crate::panes::methods::view(&self.session, &self.ui)
@@ -552,8 +668,15 @@ impl App {
                     *c = Some(c.map_or(0, |i| i.saturating_sub(1)));
                 }
                 KeyCode::Char('a') => self.ui.overlay.cycle = None,
+                KeyCode::Char('r') if !self.session.logs.is_empty() => {
+                    let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
+                    self.start_overlay(i);
+                }
                 _ => {}
             },
+            PaneId::Yield if k.code == KeyCode::Char('r') && !self.session.images.is_empty() => {
+                self.start_yield();
+            }
             PaneId::Model => match k.code {
                 KeyCode::Enter | KeyCode::Char('e') => {
                     self.ui.model.editing =
@@ -581,10 +704,16 @@ impl App {
                     KeyCode::Right | KeyCode::Char('n') | KeyCode::Char('l') if n > 0 => {
                         self.ui.vision.image = (self.ui.vision.image + 1) % n;
                         self.ui.vision.pin = 0;
+                        self.suppressed.retain(|k| *k != JobKind::Inspect);
                     }
                     KeyCode::Left | KeyCode::Char('p') | KeyCode::Char('h') if n > 0 => {
                         self.ui.vision.image = (self.ui.vision.image + n - 1) % n;
                         self.ui.vision.pin = 0;
+                        self.suppressed.retain(|k| *k != JobKind::Inspect);
+                    }
+                    KeyCode::Char('r') if n > 0 => {
+                        let i = self.ui.vision.image.min(n - 1);
+                        self.start_inspect(i);
                     }
                     _ => {}
                 }

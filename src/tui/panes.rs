@@ -18,6 +18,7 @@ use crate::panes::vision::VisionView;
 use crate::panes::yields::YieldView;
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::Modifier;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Cell, Paragraph, Row, Table, TableState, Wrap};
 
@@ -142,8 +143,30 @@ fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme) {
         let mut st = TableState::default().with_selected(Some(v.selected));
         f.render_stateful_widget(table, files_area, &mut st);
     }
-    // Details: logs' metadata, recipes, images.
+    // Details: display, the selected file's findings, logs' metadata,
+    // recipes, images.
     let mut lines = Vec::new();
+    if let Some(d) = &v.display {
+        lines.push(kv_line("display", d.clone(), theme));
+    }
+    lines.push(kv_line(
+        "images",
+        format!("{}, recipes {}", v.images, v.recipes.len()),
+        theme,
+    ));
+    if let Some(sel) = v.files.get(v.selected) {
+        if !sel.message.is_empty() {
+            // One line per finding (the selected file's warnings or error).
+            let w = detail_area.width.saturating_sub(4) as usize;
+            lines.push(Line::from(vec![
+                Span::styled(format!("{} ", sel.status), theme.status(&sel.status)),
+                Span::raw(trunc_left(&sel.path, w.saturating_sub(8))),
+            ]));
+            for m in sel.message.split(crate::panes::session::FINDING_SEP) {
+                lines.push(Line::styled(format!("  {}", trunc(m, w)), theme.muted()));
+            }
+        }
+    }
     for l in &v.logs {
         lines.push(Line::styled(trunc_left(&l.path, 60), theme.header()));
         lines.push(kv_line(
@@ -161,10 +184,6 @@ fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme) {
         for r in &v.recipes {
             lines.push(Line::raw(format!("  {r}")));
         }
-    }
-    lines.push(kv_line("images", v.images.to_string(), theme));
-    if let Some(d) = &v.display {
-        lines.push(kv_line("display", d.clone(), theme));
     }
     text_block(f, detail_area, "Metadata", lines, theme);
     if err_h > 0 {
@@ -305,7 +324,12 @@ fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme) {
         lines.push(Line::styled(format!("  why: {r}"), theme.muted()));
     }
     for (k, x) in &v.figures {
-        lines.push(kv_line(k, format_value(*x), theme));
+        let shown = if x.fract() == 0.0 && x.abs() < 1e9 {
+            format!("{x:.0}")
+        } else {
+            format_value(*x)
+        };
+        lines.push(kv_line(k, shown, theme));
     }
     if let Some(m) = &v.message {
         lines.push(Line::raw(""));
@@ -580,28 +604,47 @@ fn vision(f: &mut Frame, area: Rect, v: &VisionView, theme: &Theme, img: &mut Im
     f.render_widget(b, left);
     img.draw(f, inner, v.image.as_ref(), theme);
     let mut lines = Vec::new();
-    if let Some((w, h)) = v.size {
-        lines.push(kv_line("image", format!("{w}×{h} px"), theme));
-    }
-    lines.push(kv_line(
-        "recipe",
-        v.recipe.clone().unwrap_or_else(|| "none loaded".into()),
-        theme,
-    ));
     if let Some(vd) = &v.verdict {
         lines.push(Line::from(vec![
             Span::styled("verdict: ", theme.muted()),
-            Span::styled(vd.clone(), theme.status(vd)),
+            Span::styled(
+                vd.to_uppercase(),
+                theme.status(vd).add_modifier(Modifier::BOLD),
+            ),
+            Span::raw(match (&v.counts, v.extras) {
+                (Some(c), 0) => format!("  {c}"),
+                (Some(c), x) => format!("  {c}, {x} extra"),
+                _ => String::new(),
+            }),
         ]));
+    }
+    if let Some(e) = &v.error {
+        lines.push(Line::styled(e.clone(), theme.error()));
+    }
+    if let Some((w, h)) = v.size {
+        lines.push(kv_line("image", format!("{w}×{h} px"), theme));
+    }
+    if let Some(r) = &v.recipe {
+        lines.push(kv_line("recipe", r.clone(), theme));
+    }
+    if let Some(g) = &v.grid {
+        lines.push(kv_line("grid", g.clone(), theme));
+    }
+    for w in &v.warnings {
+        lines.push(Line::styled(format!("! {w}"), theme.warn()));
     }
     if let Some(m) = &v.message {
         lines.push(Line::styled(m.clone(), theme.warn()));
     }
-    let info_h = (lines.len() as u16 + 2).min(side.height / 2);
+    let info_h = (lines.len() as u16 + 2).min(side.height / 2).max(3);
     let [info, table_area] =
         Layout::vertical([Constraint::Length(info_h), Constraint::Min(3)]).areas(side);
-    text_block(f, info, "Inspection", lines, theme);
+    let p = Paragraph::new(lines)
+        .wrap(Wrap { trim: false })
+        .block(block("Inspection", theme));
+    f.render_widget(p, info);
     if !v.pins.is_empty() {
+        let side_view = v.pins.iter().any(|p| p.height_mm.is_some());
         let rows: Vec<Row> = v
             .pins
             .iter()
@@ -609,39 +652,206 @@ fn vision(f: &mut Frame, area: Rect, v: &VisionView, theme: &Theme, img: &mut Im
                 Row::new(vec![
                     Cell::from(format!("{},{}", p.row, p.col)),
                     Cell::from(Span::styled(p.status.clone(), theme.status(&p.status))),
-                    Cell::from(opt(p.offset_mm)),
-                    Cell::from(opt(p.area_ratio)),
+                    Cell::from(opt3(p.dx_mm)),
+                    Cell::from(opt3(p.dy_mm)),
+                    Cell::from(if side_view {
+                        p.height_mm
+                            .filter(|x| x.is_finite())
+                            .map_or("–".into(), |x| format!("{x:.3}"))
+                    } else {
+                        p.area_ratio
+                            .filter(|x| x.is_finite())
+                            .map_or("–".into(), |x| format!("{x:.3}"))
+                    }),
                 ])
             })
             .collect();
         let t = Table::new(
             rows,
             [
-                Constraint::Length(6),
+                Constraint::Length(5),
                 Constraint::Length(8),
-                Constraint::Length(9),
+                Constraint::Length(7),
+                Constraint::Length(7),
                 Constraint::Min(5),
             ],
         )
-        .header(Row::new(vec!["pin", "status", "off mm", "area"]).style(theme.header()))
+        .header(
+            Row::new(vec![
+                "pin",
+                "status",
+                "dx mm",
+                "dy mm",
+                if side_view { "h mm" } else { "area" },
+            ])
+            .style(theme.header()),
+        )
         .row_highlight_style(theme.selected())
         .block(block(format!("Pins ({})", v.pins.len()), theme));
-        let mut st = TableState::default().with_selected(Some(0));
+        let mut st = TableState::default().with_selected(Some(v.selected));
         f.render_stateful_widget(t, table_area, &mut st);
+    }
+}
+
+fn opt3(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() => format!("{v:+.3}"),
+        _ => "–".into(),
     }
 }
 
 // ---------------------------------------------------------------- Yield, Methods
 
 fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
-    message(
-        f,
-        area,
-        "Yield",
-        v.message.as_deref().unwrap_or(""),
-        theme.muted(),
+    let Some(r) = &v.report else {
+        message(
+            f,
+            area,
+            "Yield",
+            v.message.as_deref().unwrap_or(""),
+            theme.muted(),
+            theme,
+        );
+        return;
+    };
+    let [left, side] =
+        Layout::horizontal([Constraint::Percentage(50), Constraint::Percentage(50)]).areas(area);
+    let pct = |x: f64| format!("{:.1} %", 100.0 * x);
+    let mut lines = vec![Line::from(vec![
+        Span::styled("yield ", theme.muted()),
+        Span::styled(
+            r.yield_frac.map(pct).unwrap_or_else(|| "–".into()),
+            theme.header(),
+        ),
+        Span::raw(format!(
+            "  95 % CI {}–{} (Wilson)",
+            pct(r.ci95.0),
+            pct(r.ci95.1)
+        )),
+    ])];
+    lines.push(kv_line(
+        "connectors",
+        format!(
+            "{} inspected: {} pass, {} fail; {} error(s)",
+            r.inspected, r.passed, r.failed, r.errors
+        ),
         theme,
-    );
+    ));
+    lines.push(kv_line(
+        "DPPM",
+        match r.dppm {
+            Some(d) => format!(
+                "{d:.0} ({} of {} pins; CI {:.0}–{:.0})",
+                r.defective_pins, r.pins_inspected, r.dppm_ci95.0, r.dppm_ci95.1
+            ),
+            None => "–".into(),
+        },
+        theme,
+    ));
+    if r.extras > 0 {
+        lines.push(kv_line(
+            "extras",
+            format!("{} on {} connector(s)", r.extras, r.connectors_with_extras),
+            theme,
+        ));
+    }
+    if let Some(m) = &v.message {
+        lines.push(Line::styled(m.clone(), theme.warn()));
+    }
+    lines.push(Line::styled("Pareto of defects", theme.header()));
+    let w = left.width.saturating_sub(24).max(4) as usize;
+    let maxc = r.pareto.iter().map(|p| p.count).max().unwrap_or(1).max(1);
+    for p in &r.pareto {
+        let n = (p.count as usize * w).div_ceil(maxc as usize);
+        lines.push(Line::from(vec![
+            Span::styled(format!("{:<8}", p.kind), theme.status(&p.kind)),
+            Span::raw(format!("{:>4} ", p.count)),
+            Span::styled("█".repeat(n), theme.status(&p.kind)),
+            Span::styled(format!(" {:.0}%", 100.0 * p.cumulative), theme.muted()),
+        ]));
+    }
+    let groups: Vec<(&str, &Vec<crate::vision::report::GroupYield>)> =
+        [("lot", &r.groups), ("speed", &r.by_speed)]
+            .into_iter()
+            .filter(|(_, g)| !g.is_empty())
+            .collect();
+    for (what, gs) in groups {
+        lines.push(Line::styled(format!("yield by {what}"), theme.header()));
+        for g in gs {
+            lines.push(Line::raw(format!(
+                "{:<14} {:>3}/{:<3} {:>7}  CI {}–{}",
+                trunc(&g.key, 14),
+                g.passed,
+                g.inspected,
+                g.yield_frac.map(pct).unwrap_or_else(|| "–".into()),
+                pct(g.ci95.0),
+                pct(g.ci95.1)
+            )));
+        }
+    }
+    text_block(f, left, "Yield", lines, theme);
+    let worst: Vec<&crate::vision::report::PositionStats> = r
+        .worst_pins
+        .iter()
+        .filter(|p| p.defects > 0)
+        .take(8)
+        .collect();
+    let worst_h = if worst.is_empty() {
+        0
+    } else {
+        (worst.len() as u16 + 3).min(side.height / 2)
+    };
+    let [wa, ia] = Layout::vertical([Constraint::Length(worst_h), Constraint::Min(3)]).areas(side);
+    if worst_h > 0 {
+        let rows: Vec<Row> = worst
+            .iter()
+            .map(|p| {
+                Row::new(vec![
+                    trunc(&p.part_number, 14),
+                    format!("{},{}", p.row, p.col),
+                    format!("{}/{}", p.defects, p.inspected),
+                    opt(p.max_offset_mm),
+                ])
+            })
+            .collect();
+        let t = Table::new(
+            rows,
+            [
+                Constraint::Length(14),
+                Constraint::Length(5),
+                Constraint::Length(7),
+                Constraint::Min(6),
+            ],
+        )
+        .header(Row::new(vec!["part", "pin", "defects", "max off mm"]).style(theme.header()))
+        .block(block("Worst pins", theme));
+        f.render_widget(t, wa);
+    }
+    let nw = ia.width.saturating_sub(30).max(8) as usize;
+    let rows: Vec<Row> = v
+        .items
+        .iter()
+        .map(|it| {
+            Row::new(vec![
+                Cell::from(trunc_left(&it.name, nw)),
+                Cell::from(Span::styled(it.status.clone(), theme.status(&it.status))),
+                Cell::from(it.note.clone()),
+            ])
+        })
+        .collect();
+    let t = Table::new(
+        rows,
+        [
+            Constraint::Length(nw as u16),
+            Constraint::Length(6),
+            Constraint::Min(8),
+        ],
+    )
+    .header(Row::new(vec!["image", "result", "note"]).style(theme.header()))
+    .row_highlight_style(theme.selected())
+    .block(block(format!("Images ({})", v.items.len()), theme));
+    let mut st = TableState::default().with_selected(Some(v.selected));
+    f.render_stateful_widget(t, ia, &mut st);
 }
 
 fn methods(f: &mut Frame, area: Rect, v: &MethodsView, theme: &Theme) {

@@ -6,10 +6,18 @@
 //! pure function also used by tests to run jobs in line.
 
 use crate::model::params::Params;
-use crate::panes::session::{Loaded, ModelRun, StudySetup, load_path, run_model, run_study};
+use crate::panes::analysis::{
+    Inspected, OverlayRun, YieldRun, inspect_image, run_overlay, run_yield,
+};
+use crate::panes::session::{
+    ImageEntry, Loaded, ModelRun, StudySetup, load_path, run_model, run_study,
+};
 use crate::progress::Progress;
+use crate::rig::RigLog;
+use crate::rig::cycles::CycleSet;
 use crate::sim::LevelChoice;
 use crate::sim::sweep::SweepResult;
+use crate::vision::batch::RecipeBook;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
@@ -21,6 +29,9 @@ pub enum JobKind {
     Study,
     Load,
     Methods,
+    Inspect,
+    Yield,
+    Overlay,
 }
 
 /// A unit of background work.
@@ -38,6 +49,23 @@ pub enum JobRequest {
         paths: Vec<PathBuf>,
     },
     Methods,
+    /// Inspect one image (the Vision pane's current image).
+    Inspect {
+        index: usize,
+        image: Box<ImageEntry>,
+        book: RecipeBook,
+    },
+    /// The batch yield over every image.
+    Yield {
+        images: Vec<ImageEntry>,
+        book: RecipeBook,
+    },
+    /// Measured vs predicted for one log.
+    Overlay {
+        index: usize,
+        log: Arc<RigLog>,
+        cycles: Arc<CycleSet>,
+    },
 }
 
 impl JobRequest {
@@ -47,6 +75,9 @@ impl JobRequest {
             JobRequest::Study { .. } => JobKind::Study,
             JobRequest::Load { .. } => JobKind::Load,
             JobRequest::Methods => JobKind::Methods,
+            JobRequest::Inspect { .. } => JobKind::Inspect,
+            JobRequest::Yield { .. } => JobKind::Yield,
+            JobRequest::Overlay { .. } => JobKind::Overlay,
         }
     }
 
@@ -55,6 +86,9 @@ impl JobRequest {
             JobRequest::Model { .. } => "model".into(),
             JobRequest::Study { setup, .. } => format!("study ({} cases)", setup.grid.len()),
             JobRequest::Methods => "methods lab (quick)".into(),
+            JobRequest::Inspect { image, .. } => format!("inspecting {}", image.name),
+            JobRequest::Yield { images, .. } => format!("yield over {} images", images.len()),
+            JobRequest::Overlay { log, .. } => format!("overlay of {}", log.file),
             JobRequest::Load { paths } => match paths.as_slice() {
                 [one] => format!("opening {}", one.display()),
                 many => format!("opening {} paths", many.len()),
@@ -70,6 +104,9 @@ pub enum JobOutput {
     Study(Box<SweepResult>),
     Loaded(Vec<Loaded>),
     Methods(Box<crate::methods::dynamics::DynamicsLab>),
+    Inspected(Box<Inspected>),
+    Yield(Box<YieldRun>),
+    Overlay(Box<OverlayRun>),
     /// The job panicked (a defect): the message, for the status line.
     Failed(String),
 }
@@ -85,6 +122,18 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
         }
         JobRequest::Methods => {
             JobOutput::Methods(Box::new(crate::panes::session::run_methods(progress)))
+        }
+        JobRequest::Inspect { index, image, book } => {
+            progress.set_total(1);
+            let r = inspect_image(index, &image, &book);
+            progress.inc(1);
+            JobOutput::Inspected(Box::new(r))
+        }
+        JobRequest::Yield { images, book } => {
+            JobOutput::Yield(Box::new(run_yield(&images, &book, progress)))
+        }
+        JobRequest::Overlay { index, log, cycles } => {
+            JobOutput::Overlay(Box::new(run_overlay(index, &log, &cycles, progress)))
         }
         JobRequest::Load { paths } => {
             let mut out = Vec::new();

@@ -6,7 +6,9 @@ use pinsight::sim::sweep::SweepGrid;
 
 /// The demo session with every result the panes show computed in line:
 /// the model (paper preset, clearance level), a small study (2 × 2 × 2
-/// cases, 1 + 1 revolutions) and the quick methods lab.
+/// cases, 1 + 1 revolutions), the first image's inspection, the batch
+/// yield, the overlay of the demo log (and, with methods, the quick
+/// methods lab).
 pub fn full_session() -> Session {
     let mut s = Session::demo();
     s.display = Some("test display".into());
@@ -20,6 +22,9 @@ pub fn full_session() -> Session {
     s.study_setup.warmup = 1.0;
     s.study_setup.revs = 1.0;
     s.run_study_now();
+    s.inspect_now(0);
+    s.run_yield_now();
+    s.run_overlay_now(0);
     s
 }
 
