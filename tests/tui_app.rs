@@ -66,6 +66,16 @@ fn every_pane_by_number_tab_and_mouse_and_help_lists_every_key() {
         app.session.methods.is_some(),
         "methods lab ran on first visit"
     );
+    // Both labs: the vision lab's localisers and, on every degradation
+    // axis, the level where the verdicts break.
+    let v = pinsight::panes::methods::view(&app.session, &app.ui);
+    assert_eq!(v.localisers.len(), 3, "{:?}", v.localisers);
+    for factor in ["noise", "blur", "contrast", "rotation"] {
+        let b: Vec<_> = v.breakdown.iter().filter(|b| b.factor == factor).collect();
+        assert!(!b.is_empty(), "{factor}: {:?}", v.breakdown);
+        assert!(b.iter().all(|b| b.breaks_at.is_some()), "{factor}: {b:?}");
+    }
+    assert!(v.chart_titles.iter().any(|t| t == "Pipeline against blur"));
     app.update(key(KeyCode::Tab));
     assert_eq!(app.pane, PaneId::Session);
     app.update(key(KeyCode::BackTab));

@@ -2,6 +2,7 @@
 
 use super::common::ParamArgs;
 use crate::model::params::Params;
+use crate::panes::fmt_opt;
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::sim::ensemble::{EnsembleResult, run_ensemble};
 use crate::sim::fidelity::{FidelityReport, SceneResolution, assess};
@@ -208,11 +209,6 @@ pub fn to_json(
         }
     }
     v
-}
-
-fn fmt_opt(x: Option<f64>, prec: usize) -> String {
-    x.map(|v| format!("{v:.prec$}"))
-        .unwrap_or_else(|| "–".into())
 }
 
 #[allow(clippy::too_many_arguments)]

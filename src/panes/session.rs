@@ -262,8 +262,8 @@ pub struct Session {
     /// How the session is displayed (set by the front end: colours, image
     /// protocol), shown on the Session pane.
     pub display: Option<String>,
-    /// The methods lab (quick effort), once run.
-    pub methods: Option<crate::methods::dynamics::DynamicsLab>,
+    /// The methods lab (quick effort: dynamics and vision), once run.
+    pub methods: Option<MethodsLab>,
     pub methods_error: Option<String>,
     /// Vision inspections by image index (run on demand: the image shown).
     pub inspections: std::collections::BTreeMap<usize, super::analysis::Inspected>,
@@ -1029,9 +1029,30 @@ pub fn run_study(params: &Params, setup: &StudySetup, progress: &Progress) -> Sw
 }
 
 /// Runs the quick methods lab (seconds): work–precision, stability, long
-/// run, step budgets, fidelity map.
-pub fn run_methods(progress: &Progress) -> crate::methods::dynamics::DynamicsLab {
-    crate::methods::dynamics::run_dynamics_lab(crate::methods::Effort::Quick, None, progress)
+/// run, step budgets, fidelity map; then the vision lab (localisers' speed
+/// against error, where the pipeline breaks).
+pub fn run_methods(progress: &Progress) -> MethodsLab {
+    let dynamics =
+        crate::methods::dynamics::run_dynamics_lab(crate::methods::Effort::Quick, None, progress);
+    // The vision lab resets the progress total; cancelling stops it too.
+    let vision = if progress.is_cancelled() {
+        None
+    } else {
+        Some(crate::vision::lab::run_lab(
+            crate::vision::lab::LabMode::Quick,
+            progress,
+        ))
+    };
+    MethodsLab { dynamics, vision }
+}
+
+/// Both labs of the Methods pane (the quick effort of `pinsight methods
+/// dynamics` and `pinsight methods vision`).
+#[derive(Debug, Clone)]
+pub struct MethodsLab {
+    pub dynamics: crate::methods::dynamics::DynamicsLab,
+    /// None when the run was cancelled before the vision lab.
+    pub vision: Option<crate::vision::lab::VisionLab>,
 }
 
 #[cfg(test)]

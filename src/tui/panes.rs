@@ -929,5 +929,43 @@ fn methods(f: &mut Frame, area: Rect, v: &MethodsView, theme: &Theme) {
             ));
         }
     }
+    // Times per tip stay in the view model (JSON) and the speed chart:
+    // drawn screens carry no timings, so they diff cleanly.
+    if !v.localisers.is_empty() {
+        lines.push(Line::styled(
+            "vision: centre error px (clean / 8 DN)",
+            theme.header(),
+        ));
+        for l in &v.localisers {
+            lines.push(Line::raw(trunc(
+                &format!(
+                    "{}: {} / {}",
+                    l.localiser,
+                    crate::panes::fmt_opt(l.rms_px_clean, 3),
+                    crate::panes::fmt_opt(l.rms_px_noise8, 3)
+                ),
+                w + 2,
+            )));
+        }
+    }
+    if !v.breakdown.is_empty() {
+        lines.push(Line::styled(
+            "vision: verdicts ≥ 90 % up to (breaks at)",
+            theme.header(),
+        ));
+        let level = |x: Option<f64>| x.map(|x| x.to_string()).unwrap_or_else(|| "–".into());
+        for b in &v.breakdown {
+            lines.push(Line::raw(trunc(
+                &format!(
+                    "{} {} ({}): {}",
+                    b.factor,
+                    level(b.holds_to),
+                    level(b.breaks_at),
+                    b.localisers
+                ),
+                w + 2,
+            )));
+        }
+    }
     text_block(f, info, "Tables", lines, theme);
 }

@@ -103,7 +103,7 @@ pub enum JobOutput {
     Model(Box<Result<ModelRun, String>>),
     Study(Box<SweepResult>),
     Loaded(Vec<Loaded>),
-    Methods(Box<crate::methods::dynamics::DynamicsLab>),
+    Methods(Box<crate::panes::session::MethodsLab>),
     Inspected(Box<Inspected>),
     Yield(Box<YieldRun>),
     Overlay(Box<OverlayRun>),
