@@ -3,6 +3,7 @@
 //! Prints a summary of every step and check; exits 1 when a check fails or
 //! a step errs, 2 when the script cannot be read.
 
+use crate::cli::common::outp;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -21,7 +22,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let report =
         crate::batch::script::run_file(&args.script, &args.out).map_err(|e| anyhow::anyhow!(e))?;
-    print!("{}", report.table());
+    outp!("{}", report.table())?;
     if let Some(p) = &args.json {
         std::fs::write(p, serde_json::to_string_pretty(&report)?)
             .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", p.display()))?;

@@ -7,6 +7,7 @@
 
 use super::common::ParamArgs;
 use super::overlay::{load_and_cycles, load_options};
+use crate::cli::common::{outln, outp};
 use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport, calibrate};
 use crate::overlay::compare::model_params;
 use crate::progress::{Progress, ProgressBarGuard};
@@ -78,11 +79,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print!("{}", summary_text(&report));
+        outp!("{}", summary_text(&report))?;
         if let Some(path) = &args.out {
-            println!("  wrote the parameter file {}", path.display());
+            outln!("  wrote the parameter file {}", path.display())?;
         }
     }
     Ok(ExitCode::SUCCESS)

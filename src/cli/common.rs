@@ -2,7 +2,75 @@
 
 use crate::model::params::{PARAM_SPECS, Params};
 use anyhow::{Context, bail};
+use std::io::Write;
 use std::path::PathBuf;
+
+/// Standard output for the commands' reports. A closed pipe (`pinsight …
+/// | head`) is the reader's choice, not an error: from then on the text is
+/// dropped and the command goes on (and finishes writing its files). Any
+/// other write error is returned.
+pub struct Stdout {
+    inner: std::io::StdoutLock<'static>,
+    closed: bool,
+}
+
+/// The locked standard output, tolerant of a closed pipe.
+pub fn stdout() -> Stdout {
+    Stdout {
+        inner: std::io::stdout().lock(),
+        closed: false,
+    }
+}
+
+impl Write for Stdout {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.closed {
+            return Ok(buf.len());
+        }
+        match self.inner.write(buf) {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.closed = true;
+                Ok(buf.len())
+            }
+            r => r,
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.closed {
+            return Ok(());
+        }
+        match self.inner.flush() {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.closed = true;
+                Ok(())
+            }
+            r => r,
+        }
+    }
+}
+
+/// Writes text to [`stdout`].
+pub fn out(text: &str) -> anyhow::Result<()> {
+    let mut o = stdout();
+    o.write_all(text.as_bytes())
+        .and_then(|()| o.flush())
+        .map_err(|e| anyhow::Error::new(e).context("writing to standard output"))
+}
+
+/// `println!` through [`out`]: evaluates to `anyhow::Result<()>`.
+macro_rules! outln {
+    ($($t:tt)*) => {
+        $crate::cli::common::out(&format!("{}\n", format_args!($($t)*)))
+    };
+}
+/// `print!` through [`out`].
+macro_rules! outp {
+    ($($t:tt)*) => {
+        $crate::cli::common::out(&format!($($t)*))
+    };
+}
+pub(crate) use {outln, outp};
 
 /// `--preset`, `--params FILE`, `--set key=value` (in that order of precedence,
 /// lowest first).

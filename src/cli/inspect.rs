@@ -182,8 +182,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         magnify: args.magnify,
         ..Default::default()
     };
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = crate::cli::common::stdout();
     for r in &results {
         if !args.json {
             write!(out, "{}", text_report(r))?;

@@ -6,6 +6,7 @@
 //! log is `partial` or `error` (data lost or nothing usable), 2 when a file
 //! could not be read at all (each file is still reported; the others go on).
 
+use crate::cli::common::{outln, outp};
 use crate::model::Params;
 use crate::model::kinematics::Geometry;
 use crate::progress::{Progress, ProgressBarGuard};
@@ -82,7 +83,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 if args.json {
                     summaries.push(s);
                 } else {
-                    print!("{}", render_text(&s, args.all_cycles));
+                    outp!("{}", render_text(&s, args.all_cycles))?;
                 }
             }
             Err(e) => {
@@ -97,7 +98,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         } else {
             serde_json::to_string_pretty(&summaries)?
         };
-        println!("{text}");
+        outln!("{text}")?;
     }
     Ok(ExitCode::from(code))
 }

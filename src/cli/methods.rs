@@ -1,5 +1,6 @@
 //! `pinsight methods [dynamics|vision]`: the methods lab.
 
+use crate::cli::common::outln;
 use crate::methods::Effort;
 use crate::methods::dynamics::{DynamicsLab, run_dynamics_lab, scenes_from_toml};
 use crate::plot::write_png;
@@ -94,9 +95,9 @@ fn run_dynamics(args: &Args, effort: Effort) -> anyhow::Result<ExitCode> {
         600,
     )?;
     if args.json {
-        println!("{json}");
+        outln!("{json}")?;
     } else {
-        print_summary(&mut std::io::stdout().lock(), &lab, &args.out)?;
+        print_summary(&mut crate::cli::common::stdout(), &lab, &args.out)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -131,9 +132,9 @@ fn run_vision(args: &Args) -> anyhow::Result<ExitCode> {
         1500,
     )?;
     if args.json {
-        println!("{json}");
+        outln!("{json}")?;
     } else {
-        print_vision_summary(&mut std::io::stdout().lock(), &lab, &args.out)?;
+        print_vision_summary(&mut crate::cli::common::stdout(), &lab, &args.out)?;
     }
     Ok(ExitCode::SUCCESS)
 }

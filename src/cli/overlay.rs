@@ -15,6 +15,7 @@
 //! Without `--out` only the summary (or with `--json` the report) is printed.
 
 use super::common::ParamArgs;
+use crate::cli::common::{outln, outp};
 use crate::model::Params;
 use crate::model::kinematics::Geometry;
 use crate::overlay::compare::{OverlayOptions, OverlayReport, model_params, overlay};
@@ -225,9 +226,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         write_outputs(dir, &report)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        print!("{}", summary_text(&report, args.out.as_deref()));
+        outp!("{}", summary_text(&report, args.out.as_deref()))?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -2,6 +2,7 @@
 //! (text), or its view model (`--format json|csv|png`).
 
 use crate::batch::{Format, export, parse_size, render_view_text};
+use crate::cli::common::outln;
 use crate::panes::{self, PaneId, PaneState, UI_OPTIONS};
 use std::io::Write;
 use std::path::PathBuf;
@@ -46,7 +47,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.ui.iter().any(|u| u == "help") {
-        println!("UI options: {}", UI_OPTIONS.join(", "));
+        outln!("UI options: {}", UI_OPTIONS.join(", "))?;
         return Ok(ExitCode::SUCCESS);
     }
     let pane = PaneId::parse(&args.pane).ok_or_else(|| {

@@ -1,6 +1,7 @@
 //! `pinsight simulate`: one run, an ensemble, or the demo summary.
 
 use super::common::ParamArgs;
+use crate::cli::common::outln;
 use crate::model::params::Params;
 use crate::panes::fmt_opt;
 use crate::progress::{Progress, ProgressBarGuard};
@@ -136,9 +137,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             horizon.as_ref(),
             fidelity.as_ref(),
         );
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else {
-        let mut out = std::io::stdout().lock();
+        let mut out = crate::cli::common::stdout();
         write_text(
             &mut out,
             &p,
@@ -372,7 +373,7 @@ pub fn run_demo() -> anyhow::Result<ExitCode> {
     };
     let r = simulate(&p, &opts, &Progress::hidden())?;
     let h = crate::sim::ensemble::prediction_horizon(&p, &opts, 1e-9)?;
-    let mut out = std::io::stdout().lock();
+    let mut out = crate::cli::common::stdout();
     writeln!(
         out,
         "pinsight demo (embedded): the `paper` pin-insertion head at 1200 rpm"

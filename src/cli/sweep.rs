@@ -1,6 +1,7 @@
 //! `pinsight sweep`: the paper's study (clearance × speed × material).
 
 use super::common::{ParamArgs, parse_list_f64};
+use crate::cli::common::outln;
 use crate::plot::write_png;
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::sim::ensemble::{FIGURES, figure};
@@ -117,9 +118,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     }
     if args.json {
-        println!("{json}");
+        outln!("{json}")?;
     } else {
-        let mut out = std::io::stdout().lock();
+        let mut out = crate::cli::common::stdout();
         writeln!(
             out,
             "pinsight sweep — preset {}, {} cases ({} clearances × {} speeds × {} materials), {} rtol {:.0e}, {} + {} revolutions",

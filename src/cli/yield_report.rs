@@ -12,6 +12,7 @@
 //! Exit status: 0 done, 3 done but some images were errors, 2 the command
 //! itself failed.
 
+use crate::cli::common::{outln, outp};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::{self, ItemStatus, RecipeBook};
 use crate::vision::report::{self, GroupBy, YieldReport};
@@ -86,22 +87,26 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                     )
                 })
                 .unwrap_or_else(|| "n/a".into());
-            println!(
+            outln!(
                 "{} items: {} inspected, {} passed, {} failed, {} errors; yield {y}",
-                rep.items, rep.inspected, rep.passed, rep.failed, rep.errors
-            );
+                rep.items,
+                rep.inspected,
+                rep.passed,
+                rep.failed,
+                rep.errors
+            )?;
             for e in &rep.error_list {
-                println!("error: {}: {}", e.name, e.message);
+                outln!("error: {}: {}", e.name, e.message)?;
             }
             for f in files {
-                println!("wrote {f}");
+                outln!("wrote {f}")?;
             }
         }
         None => {
             if args.json {
-                println!("{}", serde_json::to_string_pretty(&rep)?);
+                outln!("{}", serde_json::to_string_pretty(&rep)?)?;
             } else {
-                print!("{}", rep.markdown(&title, &[]));
+                outp!("{}", rep.markdown(&title, &[]))?;
             }
         }
     }
