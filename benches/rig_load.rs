@@ -21,6 +21,10 @@ use pinsight::rig::{LoadOptions, load};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+#[path = "../examples/common/proc_stats.rs"]
+mod proc_stats;
+use proc_stats::{cpu_s, status_kb};
+
 /// Revolutions giving ~100 MB of zstd (4 MiB chunks) with the default sensors.
 const REVOLUTIONS: f64 = 3018.0;
 
@@ -62,25 +66,6 @@ fn ensure_log() -> PathBuf {
         );
     }
     p
-}
-
-fn status_kb(key: &str) -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .unwrap_or_default()
-        .lines()
-        .find(|l| l.starts_with(key))
-        .and_then(|l| l.split_whitespace().nth(1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0)
-}
-
-/// CPU time (user + system) of this process so far, s (/proc/self/stat, 100 ticks/s).
-fn cpu_s() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let after = stat.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let tick = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0) / 100.0;
-    tick(11) + tick(12)
 }
 
 /// One load + cycles in this process; prints the figures as one JSON line.

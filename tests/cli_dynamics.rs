@@ -222,24 +222,30 @@ fn methods_quick_lab_writes_its_tables() {
     }
 }
 
+/// Runs the command with its stdout a pipe whose read end is closed before
+/// the command has printed anything (`| head` having had enough).
+fn run_with_stdout_closed(mut cmd: Command) -> std::process::Output {
+    use std::process::Stdio;
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
 /// `pinsight simulate --json | head -1`: the reader closing the pipe early
 /// is not a failure, and never a panic trace.
 #[test]
 fn closed_stdout_pipe_is_not_a_panic() {
-    use std::process::Stdio;
     for args in [
         &["simulate", "--json"][..],
         &["simulate", "--revs", "0.5", "--warmup", "0"][..],
     ] {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_pinsight"))
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        // Close the read end before the simulation has printed anything.
-        drop(child.stdout.take());
-        let out = child.wait_with_output().unwrap();
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_pinsight"));
+        cmd.args(args);
+        let out = run_with_stdout_closed(cmd);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!err.contains("panicked"), "{args:?}: {err}");
         assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
@@ -250,7 +256,6 @@ fn closed_stdout_pipe_is_not_a_panic() {
 /// text; every annotated overlay is still written.
 #[test]
 fn closed_stdout_pipe_still_writes_every_file() {
-    use std::process::Stdio;
     let dir = tempfile::tempdir().unwrap();
     let fx = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/interop/images");
     let imgs: Vec<String> = (0..4).map(|i| format!("{fx}/h2x10-0{i}.png")).collect();
@@ -259,21 +264,16 @@ fn closed_stdout_pipe_still_writes_every_file() {
         .filter(|p| std::path::Path::new(p).exists())
         .collect();
     assert!(imgs.len() >= 2);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pinsight"))
-        .args([
-            "inspect",
-            "--recipe",
-            &format!("{fx}/hdr-2x10.toml"),
-            "--out",
-        ])
-        .arg(dir.path())
-        .args(&imgs)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_pinsight"));
+    cmd.args([
+        "inspect",
+        "--recipe",
+        &format!("{fx}/hdr-2x10.toml"),
+        "--out",
+    ])
+    .arg(dir.path())
+    .args(&imgs);
+    let out = run_with_stdout_closed(cmd);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
     // docs/vision.md: 0 all passed, 1 some failed (h2x10-00 has a bent pin).

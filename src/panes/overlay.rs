@@ -53,7 +53,7 @@ pub struct CycleRow {
 }
 
 /// The Overlay pane's view.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct OverlayView {
     /// The measured log, when there is one.
     pub source: Option<String>,
@@ -146,18 +146,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
     let mut v = OverlayView {
         source: Some(log.path.clone()),
         showing: "envelope".into(),
-        stroke: None,
-        force: None,
-        residual: None,
-        cycles: Vec::new(),
-        selected: None,
-        figures: Vec::new(),
-        level: None,
-        level_reason: None,
-        message: None,
-        notes: Vec::new(),
-        wall_ms: None,
-        residuals: None,
+        ..Default::default()
     };
     let Some(run) = s.overlay_of(li) else {
         v.message = Some(format!(
@@ -328,20 +317,10 @@ fn prediction_view(s: &Session, ui: &PaneState) -> OverlayView {
     let cols = ui.chart_columns(0.6);
     let run = s.model.as_ref();
     let mut v = OverlayView {
-        source: None,
         showing: "prediction only".into(),
-        stroke: None,
-        force: None,
-        residual: None,
-        cycles: Vec::new(),
-        selected: None,
-        figures: Vec::new(),
         level: run.map(|r| r.level.name().to_string()),
         level_reason: run.map(|r| r.level_reason.clone()),
-        message: None,
-        notes: Vec::new(),
-        wall_ms: None,
-        residuals: None,
+        ..Default::default()
     };
     v.message =
         Some("prediction only: no rig log loaded (open a .mcap log with o to compare)".into());
