@@ -37,6 +37,7 @@ pub mod panes;
 pub mod plot;
 pub mod progress;
 pub mod rig;
+pub mod rng;
 pub mod sim;
 pub mod solver;
 pub mod tui;
