@@ -275,6 +275,15 @@ impl Recipe {
         self.tolerance.tip_area.unwrap_or(DEFAULT_TIP_AREA)
     }
 
+    /// The tolerances in force, as a result reports them: the top view's
+    /// tip-area default filled in, no tip-area limit in the side view.
+    pub fn tolerance_in_force(&self) -> Tolerance {
+        Tolerance {
+            tip_area: (self.view == View::Top).then(|| self.tip_area()),
+            ..self.tolerance.clone()
+        }
+    }
+
     /// Whether (row, col) is empty by design.
     pub fn is_skipped(&self, row: u32, col: u32) -> bool {
         self.skip.iter().any(|s| s[0] == row && s[1] == col)

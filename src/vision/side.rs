@@ -683,14 +683,7 @@ pub fn inspect_side<P: Px>(
         part_number: recipe.part_number.clone(),
         view: recipe.view,
         verdict: Verdict::Fail,
-        tolerance: super::recipe::Tolerance {
-            tip_area: if recipe.view == super::recipe::View::Top {
-                Some(recipe.tip_area())
-            } else {
-                None
-            },
-            ..recipe.tolerance.clone()
-        },
+        tolerance: recipe.tolerance_in_force(),
         image: info,
         grid: GridFit {
             transform: sim,
