@@ -2,9 +2,8 @@
 //! (text), or its view model (`--format json|csv|png`).
 
 use crate::batch::{Format, export, parse_size, render_view_text};
-use crate::cli::common::outln;
+use crate::cli::common::{outln, outp};
 use crate::panes::{self, PaneId, PaneState, UI_OPTIONS};
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -104,26 +103,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
     }
     let view = panes::view(pane, &session, &ui);
-    let mut stdout = std::io::stdout();
-    let written = match (&args.out, format) {
+    match (&args.out, format) {
         (Some(path), f) => {
             let what = export(&session, &view, f, (w, h), path).map_err(|e| anyhow::anyhow!(e))?;
             eprintln!("wrote {} ({what})", path.display());
-            Ok(())
         }
         (None, Format::Png) => anyhow::bail!("--format png needs --out FILE"),
-        (None, Format::Text) => {
-            stdout.write_all(render_view_text(&session, &view, w, h).as_bytes())
-        }
-        (None, Format::Json) => {
-            writeln!(stdout, "{}", serde_json::to_string_pretty(&view.to_json())?)
-        }
-        (None, Format::Csv) => stdout.write_all(view.to_csv().as_bytes()),
-    };
-    // A closed pipe (`| head`) is the reader's choice, not an error.
-    match written {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => return Err(e.into()),
-        _ => {}
+        (None, Format::Text) => outp!("{}", render_view_text(&session, &view, w, h))?,
+        (None, Format::Json) => outln!("{}", serde_json::to_string_pretty(&view.to_json())?)?,
+        (None, Format::Csv) => outp!("{}", view.to_csv())?,
     }
     Ok(ExitCode::SUCCESS)
 }
