@@ -30,6 +30,7 @@
 
 pub mod batch;
 pub mod cli;
+pub mod engine;
 pub mod methods;
 pub mod model;
 pub mod overlay;

@@ -13,9 +13,10 @@
 //! itself failed.
 
 use crate::cli::common::{outln, outp};
+use crate::engine::vision::run_yield_inputs;
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::{self, ItemStatus, RecipeBook};
-use crate::vision::report::{self, GroupBy, YieldReport};
+use crate::vision::report::{self, GroupBy};
 use crate::vision::{InspectOptions, Localiser};
 use anyhow::Context;
 use std::path::PathBuf;
@@ -48,22 +49,27 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     for e in &book.invalid {
         eprintln!("warning: {e}");
     }
-    let (items, mut results) = batch::collect_items(&args.inputs);
-    let progress = Progress::new(items.len() as u64);
+    // The one yield path (engine): unreadable inputs are `error` items.
+    let (items, errors) = batch::collect_items(&args.inputs);
+    let inputs: Vec<Result<batch::Item, batch::ItemResult>> = errors
+        .into_iter()
+        .map(Err)
+        .chain(items.into_iter().map(Ok))
+        .collect();
+    let progress = Progress::new(inputs.len() as u64);
     progress.set_message("inspecting");
     let opts = InspectOptions {
         localiser: Localiser::Coverage,
     };
-    let inspected = {
+    let run = {
         let _bar = ProgressBarGuard::start(progress.clone(), "yield");
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(args.jobs.unwrap_or(0))
             .build()
             .context("cannot start worker threads")?;
-        pool.install(|| batch::run_batch(&items, &book, &opts, &progress))
+        pool.install(|| run_yield_inputs(&inputs, &book, &opts, args.by, &progress))
     };
-    results.extend(inspected);
-    let rep = YieldReport::build(&results, args.by);
+    let (rep, results) = (run.report, run.results);
     let title = format!(
         "Yield report: {}",
         book.recipes

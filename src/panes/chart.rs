@@ -4,6 +4,8 @@
 //! (which draws every point it is given, pitfalls.md), batch mode turns them
 //! into [`crate::plot`] panels for PNG.
 
+use crate::engine::signals::scan;
+pub use crate::engine::signals::{BLOCK, MinMaxBlocks};
 use crate::plot::{LineChart, Panel, Series, SeriesStyle};
 use serde::Serialize;
 
@@ -348,91 +350,6 @@ pub fn fmt_tick(v: f64, span: f64) -> String {
 /// Cost: two binary searches and one pass over the samples in the window.
 pub fn decimate_minmax(xs: &[f64], ys: &[f64], x0: f64, x1: f64, cols: usize) -> Vec<(f64, f64)> {
     decimate_minmax_with(xs, ys, None, x0, x1, cols)
-}
-
-/// Per-block minima and maxima of a long series (blocks of [`BLOCK`]
-/// samples), so a column's extremes cost O(column / BLOCK + BLOCK) instead
-/// of O(column): zoomed-out views of 10⁶-sample channels stay fast.
-#[derive(Debug, Clone)]
-pub struct MinMaxBlocks {
-    min: Vec<(f64, usize)>,
-    max: Vec<(f64, usize)>,
-}
-
-/// Samples per block of [`MinMaxBlocks`].
-pub const BLOCK: usize = 64;
-
-impl MinMaxBlocks {
-    pub fn new(ys: &[f64]) -> Self {
-        let nb = ys.len().div_ceil(BLOCK);
-        let mut min = Vec::with_capacity(nb);
-        let mut max = Vec::with_capacity(nb);
-        for (b, chunk) in ys.chunks(BLOCK).enumerate() {
-            let (mn, imn, mx, imx) = scan(chunk);
-            let at = |i: usize| {
-                if i == usize::MAX {
-                    usize::MAX
-                } else {
-                    b * BLOCK + i
-                }
-            };
-            min.push((mn, at(imn)));
-            max.push((mx, at(imx)));
-        }
-        Self { min, max }
-    }
-
-    /// Extremes of `ys[a..b]`: (min, index, max, index); index usize::MAX
-    /// when the range has no finite value.
-    fn extremes(&self, ys: &[f64], a: usize, b: usize) -> (f64, usize, f64, usize) {
-        let first_full = a.div_ceil(BLOCK);
-        let last_full = b / BLOCK; // blocks first_full..last_full lie inside [a, b)
-        if first_full >= last_full {
-            let (mn, imn, mx, imx) = scan(&ys[a..b]);
-            return (mn, shift(imn, a), mx, shift(imx, a));
-        }
-        let (mut mn, imn, mut mx, imx) = scan(&ys[a..first_full * BLOCK]);
-        let (mut imn, mut imx) = (shift(imn, a), shift(imx, a));
-        for k in first_full..last_full {
-            if self.min[k].0 < mn {
-                (mn, imn) = self.min[k];
-            }
-            if self.max[k].0 > mx {
-                (mx, imx) = self.max[k];
-            }
-        }
-        let t = last_full * BLOCK;
-        let (tmn, timn, tmx, timx) = scan(&ys[t..b]);
-        if tmn < mn {
-            (mn, imn) = (tmn, shift(timn, t));
-        }
-        if tmx > mx {
-            (mx, imx) = (tmx, shift(timx, t));
-        }
-        (mn, imn, mx, imx)
-    }
-}
-
-fn shift(i: usize, by: usize) -> usize {
-    if i == usize::MAX { i } else { i + by }
-}
-
-/// Minimum and maximum (with their positions) of the finite values; NaN
-/// compares false and is skipped.
-fn scan(seg: &[f64]) -> (f64, usize, f64, usize) {
-    let (mut mn, mut mx) = (f64::INFINITY, f64::NEG_INFINITY);
-    let (mut imn, mut imx) = (usize::MAX, usize::MAX);
-    for (k, &y) in seg.iter().enumerate() {
-        if y < mn {
-            mn = y;
-            imn = k;
-        }
-        if y > mx {
-            mx = y;
-            imx = k;
-        }
-    }
-    (mn, imn, mx, imx)
 }
 
 /// [`decimate_minmax`] using precomputed block extremes of `ys` when given.

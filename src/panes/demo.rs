@@ -14,7 +14,9 @@
 //! benchmark in `benches/tui.rs`); the model run, the inspections, the yield
 //! and the overlay run on the worker after the first frame.
 
-use super::session::{ImageSource, Session, load_image_bytes, load_log_bytes, load_toml_text};
+use super::session::Session;
+use crate::engine::entries::ImageSource;
+use crate::engine::load::{load_image_bytes, load_log_bytes, load_toml_text};
 use std::sync::Arc;
 
 /// The demo rig log.
@@ -62,6 +64,13 @@ pub const RECIPES: [(&str, &str); 4] = [
         include_str!("../../fixtures/interop/images/side-1x10.toml"),
     ),
 ];
+
+impl Session {
+    /// The embedded demo session (see [`session`]).
+    pub fn demo() -> Self {
+        session()
+    }
+}
 
 /// The demo session (nothing run yet: the TUI runs the model and the
 /// analyses on its worker, batch mode and `render` run them in line).

@@ -17,7 +17,6 @@
 //! | Yield | [`yields`] | batch yield, confidence interval, Pareto, worst pins |
 //! | Methods | [`methods`] | work–precision and stability charts |
 
-pub mod analysis;
 pub mod chart;
 pub mod demo;
 pub mod methods;

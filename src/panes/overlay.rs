@@ -3,7 +3,7 @@
 //! per-cycle figures, and the fidelity level in use and why.
 //!
 //! With a rig log loaded, the comparison is `pinsight::overlay::compare::
-//! overlay` (run on the worker, [`super::analysis::run_overlay`]): the
+//! overlay` (run on the worker, [`crate::engine::overlay::run_overlay`]): the
 //! model at the clearance level with the log's metadata predicts an
 //! ensemble of revolutions at the logged speed (the motion in a worn joint
 //! is chaotic, so it is compared as bands, not impact for impact). Charts:

@@ -1,245 +1,32 @@
 //! The session: every file the user opened, the parameters in force, and the
 //! latest results the panes show.
 //!
-//! Loading goes through one function, [`load_path`], that never panics:
-//! it recognises rig logs (`.mcap`), connector images, recipe TOML files
-//! (`part_number` and `view`), parameter TOML files and folders (their
-//! files, one level deep), and records a [`FileEntry`] with the error for
-//! every file it could not use. Loading is a pure function returning
-//! [`Loaded`] items so the TUI can run it on a worker thread and merge the
-//! result with [`Session::absorb`] on the UI thread; batch mode calls the
-//! same two functions in a row.
-//!
-//! Long computations ([`run_model`], [`run_study`]) are plain functions too,
-//! taking a [`Progress`] for a gauge and cancellation; their results enter
-//! the session through [`Session::set_model_run`] / [`Session::set_study`].
+//! The session holds state only. Loading and running are the engine's
+//! ([`crate::engine`]): [`load_path`] turns paths into [`Loaded`] items that
+//! [`Session::absorb`] merges (the TUI loads on its worker thread and
+//! absorbs on the UI thread; batch mode and `render` call both in a row);
+//! the jobs ([`run_model`], [`run_study`], [`run_yield`], [`run_overlay`] …)
+//! return results that enter through the `set_*` methods, so every pane
+//! stays a pure function of the session.
 
-use crate::model::kinematics::Geometry;
+pub use crate::engine::entries::{
+    FINDING_SEP, FileEntry, FileKind, FileStatus, ImageEntry, ImageSource, Loaded, LogEntry,
+    RecipeEntry,
+};
+pub use crate::engine::load::{load_image_bytes, load_log_bytes, load_path, load_toml_text};
+pub use crate::engine::model::{
+    MethodsLab, ModelRun, StudySetup, predicted_signals, run_methods, run_model, run_study,
+};
+pub use crate::engine::overlay::{OverlayRun, run_overlay};
+pub use crate::engine::signals::{Channel, SignalSet};
+pub use crate::engine::vision::{Inspected, YieldRun, inspect_image, recipe_book, run_yield};
 use crate::model::params::Params;
 use crate::progress::Progress;
-use crate::rig::cycles::{CycleOptions, CycleSet, analyse};
-use crate::rig::{LoadOptions, LoadStatus, RigLog, Severity};
-use crate::sim::fidelity::{FidelityReport, SceneResolution, assess};
-use crate::sim::sweep::{SweepGrid, SweepResult, run_sweep};
-use crate::sim::{Level, LevelChoice, SimOptions, SimResult, simulate};
-use crate::solver::Method;
-use crate::vision::batch::ItemMeta;
-use serde::Serialize;
+use crate::sim::sweep::SweepResult;
+use crate::sim::{Level, LevelChoice};
+use crate::vision::batch::RecipeBook;
 use std::borrow::Cow;
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
-
-/// What a file is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FileKind {
-    RigLog,
-    Image,
-    Recipe,
-    Params,
-    Folder,
-    Unknown,
-}
-
-impl FileKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            FileKind::RigLog => "rig log",
-            FileKind::Image => "image",
-            FileKind::Recipe => "recipe",
-            FileKind::Params => "parameters",
-            FileKind::Folder => "folder",
-            FileKind::Unknown => "unknown",
-        }
-    }
-}
-
-/// Whether a file could be used.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "status", content = "message", rename_all = "snake_case")]
-pub enum FileStatus {
-    Loaded,
-    /// Used, with problems worth reading (a log with gaps …).
-    Warning(String),
-    Error(String),
-    /// Deliberately not used (a ground-truth JSON beside an image …).
-    Skipped(String),
-}
-
-impl FileStatus {
-    pub fn is_error(&self) -> bool {
-        matches!(self, FileStatus::Error(_))
-    }
-}
-
-/// One opened file as the Session pane lists it.
-#[derive(Debug, Clone, Serialize)]
-pub struct FileEntry {
-    pub path: String,
-    pub kind: FileKind,
-    #[serde(flatten)]
-    pub status: FileStatus,
-    /// One line on what it holds (size, channels, part number …).
-    pub detail: String,
-}
-
-/// One channel of a log as the Signals pane draws it: time in seconds from
-/// the log's start, values in the channel's unit.
-#[derive(Debug, Clone, Serialize)]
-pub struct Channel {
-    pub name: String,
-    pub unit: String,
-    #[serde(skip)]
-    pub t_s: Vec<f64>,
-    #[serde(skip)]
-    pub values: Vec<f64>,
-    /// Block extremes of `values`, built on first use (long channels).
-    #[serde(skip)]
-    pub blocks: std::sync::OnceLock<super::chart::MinMaxBlocks>,
-}
-
-impl Channel {
-    pub fn new(
-        name: impl Into<String>,
-        unit: impl Into<String>,
-        t_s: Vec<f64>,
-        values: Vec<f64>,
-    ) -> Self {
-        Self {
-            name: name.into(),
-            unit: unit.into(),
-            t_s,
-            values,
-            blocks: std::sync::OnceLock::new(),
-        }
-    }
-
-    /// The block extremes (built once; None for short channels, where a
-    /// plain scan is as fast).
-    pub fn blocks(&self) -> Option<&super::chart::MinMaxBlocks> {
-        (self.values.len() >= 16 * super::chart::BLOCK).then(|| {
-            self.blocks
-                .get_or_init(|| super::chart::MinMaxBlocks::new(&self.values))
-        })
-    }
-}
-
-/// A time series source for the Signals pane: a rig log's channels, or the
-/// model's prediction over time when no log is loaded.
-#[derive(Debug, Clone, Serialize)]
-pub struct SignalSet {
-    pub source: String,
-    pub channels: Vec<Channel>,
-    /// Cycle starts: (time s, cycle index).
-    pub cycles: Vec<(f64, u64)>,
-    /// Metadata shown on the Session pane (rig, lot, part, clearance, speed …).
-    pub meta: Vec<(String, String)>,
-}
-
-impl SignalSet {
-    pub fn duration_s(&self) -> f64 {
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for c in &self.channels {
-            if let (Some(a), Some(b)) = (c.t_s.first(), c.t_s.last()) {
-                lo = lo.min(*a);
-                hi = hi.max(*b);
-            }
-        }
-        if lo.is_finite() { hi - lo } else { 0.0 }
-    }
-    pub fn t_range(&self) -> [f64; 2] {
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for c in &self.channels {
-            if let (Some(a), Some(b)) = (c.t_s.first(), c.t_s.last()) {
-                lo = lo.min(*a);
-                hi = hi.max(*b);
-            }
-        }
-        if lo.is_finite() && hi > lo {
-            [lo, hi]
-        } else if lo.is_finite() {
-            [lo, lo + 1.0]
-        } else {
-            [0.0, 1.0]
-        }
-    }
-}
-
-/// A loaded rig log: the channels as the Signals pane draws them and the
-/// library's plain data ([`crate::rig::RigLog`] and its [`CycleSet`], for
-/// the Overlay pane; None for a synthetic set of channels).
-#[derive(Debug, Clone)]
-pub struct LogEntry {
-    pub path: String,
-    pub signals: SignalSet,
-    pub rig: Option<(Arc<RigLog>, Arc<CycleSet>)>,
-}
-
-/// A vision recipe (from a file or a log's attachment), parsed and validated.
-#[derive(Debug, Clone, Serialize)]
-pub struct RecipeEntry {
-    pub path: String,
-    pub part_number: String,
-    pub view: String,
-    #[serde(skip)]
-    pub recipe: crate::vision::Recipe,
-}
-
-/// Where an image's bytes are.
-#[derive(Debug, Clone)]
-pub enum ImageSource {
-    File(PathBuf),
-    /// Embedded (demo) or extracted from a rig log.
-    Bytes(Arc<Vec<u8>>),
-}
-
-/// A connector image.
-#[derive(Debug, Clone)]
-pub struct ImageEntry {
-    pub name: String,
-    pub source: ImageSource,
-    pub width: u32,
-    pub height: u32,
-    /// The decoded image, for display (kept small: at most 1024 px wide).
-    pub preview: Option<Arc<image::RgbImage>>,
-    /// Where it came from (part number, lot, speed, cycle of a rig log's image).
-    pub meta: ItemMeta,
-}
-
-/// The latest model run: what was run and what came out.
-#[derive(Debug, Clone, Serialize)]
-pub struct ModelRun {
-    pub params: Params,
-    pub choice: String,
-    pub level: Level,
-    /// Why this level (forced by the user, or the fidelity chooser's reason).
-    pub level_reason: String,
-    pub options: SimOptions,
-    pub result: SimResult,
-    pub fidelity: Option<FidelityReport>,
-}
-
-/// Options of the study run from the Study pane or a batch step.
-#[derive(Debug, Clone, Serialize)]
-pub struct StudySetup {
-    pub grid: SweepGrid,
-    pub warmup: f64,
-    pub revs: f64,
-}
-
-impl Default for StudySetup {
-    /// The paper's study with the default protocol (2 warm-up + 3 reported
-    /// revolutions per case).
-    fn default() -> Self {
-        Self {
-            grid: SweepGrid::default(),
-            warmup: 2.0,
-            revs: 3.0,
-        }
-    }
-}
+use std::path::Path;
 
 /// The state every pane is computed from.
 #[derive(Debug, Clone)]
@@ -266,11 +53,11 @@ pub struct Session {
     pub methods: Option<MethodsLab>,
     pub methods_error: Option<String>,
     /// Vision inspections by image index (run on demand: the image shown).
-    pub inspections: std::collections::BTreeMap<usize, super::analysis::Inspected>,
+    pub inspections: std::collections::BTreeMap<usize, Inspected>,
     /// The batch yield over every image (None: not run, or images changed since).
-    pub yields: Option<super::analysis::YieldRun>,
+    pub yields: Option<YieldRun>,
     /// Measured-vs-predicted comparisons by log index.
-    pub overlays: std::collections::BTreeMap<usize, super::analysis::OverlayRun>,
+    pub overlays: std::collections::BTreeMap<usize, OverlayRun>,
 }
 
 impl Default for Session {
@@ -303,11 +90,6 @@ impl Session {
             yields: None,
             overlays: Default::default(),
         }
-    }
-
-    /// The embedded demo session (see [`super::demo`]).
-    pub fn demo() -> Self {
-        super::demo::session()
     }
 
     /// Opens paths (synchronously) and merges them.
@@ -412,685 +194,101 @@ impl Session {
     }
 }
 
-/// The model's predicted channels over time (stroke, load-cell force, drive
-/// torque, pin-bar speed), for the Signals pane when no log is loaded.
-pub fn predicted_signals(run: &ModelRun) -> SignalSet {
-    let mut channels = Vec::new();
-    let mut cycles = Vec::new();
-    if let Some(c) = &run.result.curves {
-        let t0 = c.t_s.first().copied().unwrap_or(0.0);
-        let t: Vec<f64> = c.t_s.iter().map(|t| t - t0).collect();
-        let ch =
-            |name: &str, unit: &str, v: &Vec<f64>| Channel::new(name, unit, t.clone(), v.clone());
-        channels.push(ch("stroke", "mm", &c.stroke_mm));
-        channels.push(ch("force", "N", &c.process_force_n));
-        channels.push(ch("torque", "N·m", &c.torque_nm));
-        channels.push(ch("speed", "m/s", &c.vel_mps));
-        // A cycle starts at top dead centre, where the wrapped crank angle
-        // passes the TDC angle (180° for zero offset; the smallest stroke).
-        let period = run.params.period();
-        if period > 0.0 && !t.is_empty() {
-            // Find the first TDC (minimum stroke in the first period).
-            let n1 = t.iter().take_while(|&&x| x < period).count().max(1);
-            let i0 = (0..n1.min(c.stroke_mm.len()))
-                .min_by(|&a, &b| c.stroke_mm[a].total_cmp(&c.stroke_mm[b]))
-                .unwrap_or(0);
-            let mut k = 0u64;
-            let mut tc = t[i0];
-            let end = t.last().copied().unwrap_or(0.0);
-            while tc <= end + 1e-12 {
-                cycles.push((tc, k));
-                k += 1;
-                tc = t[i0] + k as f64 * period;
-            }
-        }
-    }
-    SignalSet {
-        source: format!(
-            "model prediction ({} level, {}): no rig log loaded",
-            run.level.name(),
-            run.result.summary.view
-        ),
-        channels,
-        cycles,
-        meta: vec![
-            ("preset".into(), run.params.preset.clone()),
-            (
-                "clearance".into(),
-                format!("{} mm", run.params.clearance * 1e3),
-            ),
-            ("speed".into(), format!("{} rpm", run.params.motor_rpm)),
-        ],
-    }
-}
-
-/// What loading one path produced.
-#[derive(Debug, Clone)]
-pub enum Loaded {
-    /// A file listed but not used (or not usable: its entry says why).
-    Entry(FileEntry),
-    Params(FileEntry, Box<Params>),
-    Log(FileEntry, Box<LogEntry>),
-    Recipe(FileEntry, Box<RecipeEntry>),
-    Image(FileEntry, Box<ImageEntry>),
-}
-
-impl Loaded {
-    pub fn entry(&self) -> &FileEntry {
-        match self {
-            Loaded::Entry(e)
-            | Loaded::Params(e, _)
-            | Loaded::Log(e, _)
-            | Loaded::Recipe(e, _)
-            | Loaded::Image(e, _) => e,
-        }
-    }
-}
-
-fn entry(path: &str, kind: FileKind, status: FileStatus, detail: impl Into<String>) -> FileEntry {
-    FileEntry {
-        path: path.to_string(),
-        kind,
-        status,
-        detail: detail.into(),
-    }
-}
-
-const IMAGE_EXTS: [&str; 7] = ["png", "jpg", "jpeg", "bmp", "tif", "tiff", "pgm"];
-
-/// Loads one path (a folder: its files, sorted, one level deep). Never
-/// panics; every problem becomes a [`FileStatus::Error`] naming the file.
-pub fn load_path(path: &Path, progress: &Progress) -> Vec<Loaded> {
-    let shown = path.display().to_string();
-    let meta = match std::fs::metadata(path) {
-        Ok(m) => m,
-        Err(e) => {
-            return vec![Loaded::Entry(entry(
-                &shown,
-                FileKind::Unknown,
-                FileStatus::Error(format!("cannot open: {e}")),
-                "",
-            ))];
-        }
-    };
-    if meta.is_dir() {
-        let mut files: Vec<PathBuf> = match std::fs::read_dir(path) {
-            Ok(rd) => rd
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file())
-                .collect(),
-            Err(e) => {
-                return vec![Loaded::Entry(entry(
-                    &shown,
-                    FileKind::Folder,
-                    FileStatus::Error(format!("cannot list: {e}")),
-                    "",
-                ))];
-            }
-        };
-        files.sort();
-        progress.set_total(files.len() as u64);
-        let mut out = Vec::new();
-        for f in files {
-            if progress.is_cancelled() {
-                out.push(Loaded::Entry(entry(
-                    &shown,
-                    FileKind::Folder,
-                    FileStatus::Warning("loading cancelled: some files were not opened".into()),
-                    "",
-                )));
-                break;
-            }
-            let ext = ext_of(&f);
-            // Inside a folder, files pinsight has no use for are skipped quietly
-            // (ground truth beside images, notes …); named explicitly they are errors.
-            if ext == "json" || ext == "md" || ext == "txt" {
-                progress.inc(1);
-                continue;
-            }
-            out.extend(load_file(&f, progress));
-            progress.inc(1);
-        }
-        return out;
-    }
-    load_file(path, progress)
-}
-
-fn ext_of(p: &Path) -> String {
-    p.extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default()
-}
-
-fn load_file(path: &Path, progress: &Progress) -> Vec<Loaded> {
-    let shown = path.display().to_string();
-    let ext = ext_of(path);
-    match ext.as_str() {
-        "mcap" => load_log(path, progress),
-        e if IMAGE_EXTS.contains(&e) => match std::fs::read(path) {
-            Ok(bytes) => vec![load_image_bytes(
-                &shown,
-                ImageSource::File(path.to_path_buf()),
-                &bytes,
-            )],
-            Err(e) => vec![Loaded::Entry(entry(
-                &shown,
-                FileKind::Image,
-                FileStatus::Error(format!("cannot read: {e}")),
-                "",
-            ))],
-        },
-        "toml" => match std::fs::read_to_string(path) {
-            Ok(text) => vec![load_toml_text(&shown, &text)],
-            Err(e) => vec![Loaded::Entry(entry(
-                &shown,
-                FileKind::Unknown,
-                FileStatus::Error(format!("cannot read: {e}")),
-                "",
-            ))],
-        },
-        _ => vec![Loaded::Entry(entry(
-            &shown,
-            FileKind::Unknown,
-            FileStatus::Error(format!(
-                "unknown file type `.{ext}` (pinsight opens .mcap rig logs, images ({}), recipe and parameter .toml files, and folders of them)",
-                IMAGE_EXTS.join(", ")
-            )),
-            "",
-        ))],
-    }
-}
-
-/// A rig log, through [`crate::rig::load`] (crash-proof on corrupt files:
-/// a file that cannot be read as MCAP at all becomes an error entry; a
-/// partial file loads what it can and says what it lost). Its cycles are
-/// analysed at once ([`crate::rig::cycles::analyse`], preset `paper`
-/// geometry), its camera images become image entries, its attached recipes
-/// recipe entries.
-fn load_log(path: &Path, progress: &Progress) -> Vec<Loaded> {
-    let shown = path.display().to_string();
-    progress.set_message(format!("reading {shown}"));
-    match crate::rig::load(path, &LoadOptions::default(), progress) {
-        Ok(log) => log_items(&shown, log, Some(path)),
-        Err(e) => vec![Loaded::Entry(entry(
-            &shown,
-            FileKind::RigLog,
-            FileStatus::Error(one_line(&strip_file(&e.to_string(), &shown))),
-            "",
-        ))],
-    }
-}
-
-/// A rig log held in memory (the embedded demo log).
-pub fn load_log_bytes(name: &str, bytes: &[u8]) -> Vec<Loaded> {
-    let src = crate::rig::mcap_read::Source::from_vec(name, bytes.to_vec());
-    match crate::rig::load_source(&src, &LoadOptions::default(), &Progress::hidden()) {
-        Ok(log) => log_items(name, log, None),
-        Err(e) => vec![Loaded::Entry(entry(
-            name,
-            FileKind::RigLog,
-            FileStatus::Error(one_line(&e.to_string())),
-            "",
-        ))],
-    }
-}
-
-/// Signals pane names of the rig signals.
-fn channel_name(k: crate::rig::SignalKind) -> &'static str {
-    use crate::rig::SignalKind as K;
-    match k {
-        K::Angle => "angle",
-        K::Speed => "speed",
-        K::Force => "force",
-        K::Displacement => "displacement",
-        K::Cycle => "cycle",
-    }
-}
-
-/// The entries of a loaded log: the log itself (status from its load
-/// report and cycle findings), its images (decoded from `path` when the
-/// log is a file), its attached recipes.
-fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
-    let mut out = Vec::new();
-    let copts = CycleOptions {
-        geometry: Geometry::of(&Params::paper()),
-        ..CycleOptions::default()
-    };
-    let cycles = analyse(&log, &copts);
-    let t0 = log.log_start_ns.unwrap_or(0);
-    let secs = |t: i64| (t - t0) as f64 * 1e-9;
-    let mut channels = Vec::new();
-    for k in crate::rig::SignalKind::ALL {
-        if k == crate::rig::SignalKind::Cycle {
-            continue; // shown as cycle markers
-        }
-        if let Some(sig) = log.signals.get(k) {
-            channels.push(Channel::new(
-                channel_name(k),
-                sig.unit.clone(),
-                sig.t_ns.iter().map(|&t| secs(t)).collect(),
-                sig.values.clone(),
-            ));
-        }
-    }
-    let cycle_marks: Vec<(f64, u64)> = cycles
-        .cycles
-        .iter()
-        .map(|c| (secs(c.t_start_ns), c.index))
-        .collect();
-    let m = &log.meta;
-    let mut meta: Vec<(String, String)> = Vec::new();
-    let mut put = |k: &str, v: Option<String>| {
-        if let Some(v) = v {
-            meta.push((k.to_string(), v));
-        }
-    };
-    put("rig", m.rig_id.clone());
-    put("lot", m.lot.clone());
-    put("part", m.part_number.clone());
-    put("clearance", m.clearance_mm.map(|c| format!("{c} mm")));
-    put("speed", m.motor_rpm.map(|r| format!("{r} rpm")));
-    put("material", m.material.clone());
-    put("standoff", m.standoff_mm.map(|c| format!("{c} mm")));
-    put("gear ratio", m.gear_ratio.map(|g| g.to_string()));
-    put(
-        "cycles",
-        Some(format!(
-            "{} ({} usable), {}",
-            cycles.cycles.len(),
-            cycles.usable().count(),
-            match cycles.source {
-                crate::rig::cycles::CycleSource::Marks => "from the cycle marks",
-                crate::rig::cycles::CycleSource::Angle => "from the crank angle",
-                crate::rig::cycles::CycleSource::None => "no crank angle",
-            }
-        )),
-    );
-    if cycles.crank.motor_rpm_mean.is_finite() && cycles.crank.motor_rpm_mean > 0.0 {
-        put(
-            "measured speed",
-            Some(format!("{:.1} rpm", cycles.crank.motor_rpm_mean)),
-        );
-    }
-    // Findings worth a technician's attention, per channel: the entry's
-    // message lists them; the status is the worst of load and cycles.
-    let findings: Vec<&crate::rig::Finding> = log
-        .report
-        .findings
-        .iter()
-        .chain(cycles.findings.iter())
-        .filter(|f| f.severity >= Severity::Warning)
-        .collect();
-    let worst = findings.iter().map(|f| f.severity).max();
-    let listed: Vec<String> = findings
-        .iter()
-        .map(|f| {
-            let m = one_line(&strip_file(&f.message, &log.file));
-            match f.channel.as_deref() {
-                Some(ch) if !m.starts_with(ch) => format!("{ch}: {m}"),
-                _ => m,
-            }
-        })
-        .collect();
-    let status = match (log.report.status, worst) {
-        (LoadStatus::Error, _) => FileStatus::Error(if listed.is_empty() {
-            "nothing usable in the log".into()
-        } else {
-            listed.join(FINDING_SEP)
-        }),
-        (_, Some(Severity::DataLoss | Severity::Error)) => {
-            FileStatus::Warning(format!("partial: {}", listed.join(FINDING_SEP)))
-        }
-        (_, Some(_)) => FileStatus::Warning(listed.join(FINDING_SEP)),
-        (_, None) => FileStatus::Loaded,
-    };
-    let detail = format!(
-        "{:.2} s, {} channels, {} cycles, {} images, {}",
-        log.duration_s(),
-        channels.len(),
-        cycles.cycles.len(),
-        log.images.len(),
-        log.report.status.as_str()
-    );
-    let source = format!(
-        "rig log {shown}{}",
-        m.rig_id
-            .as_ref()
-            .map(|r| format!(" (rig {r})"))
-            .unwrap_or_default()
-    );
-    let usable = !status.is_error();
-    let item_meta = ItemMeta {
-        lot: m.lot.clone(),
-        part_number: m.part_number.clone(),
-        rig_id: m.rig_id.clone(),
-        motor_rpm: m.motor_rpm,
-        clearance_mm: m.clearance_mm,
-        cycle: None,
-        log: Some(shown.to_string()),
-    };
-    let image_refs = log.images.clone();
-    let attachments: Vec<(String, String)> = log
-        .attachments
-        .iter()
-        .filter(|a| a.kind == crate::rig::load::AttachmentKind::Recipe)
-        .filter_map(|a| a.text.clone().map(|t| (a.name.clone(), t)))
-        .collect();
-    let e = entry(shown, FileKind::RigLog, status, detail);
-    if usable {
-        out.push(Loaded::Log(
-            e,
-            Box::new(LogEntry {
-                path: shown.to_string(),
-                signals: SignalSet {
-                    source,
-                    channels,
-                    cycles: cycle_marks,
-                    meta,
-                },
-                rig: Some((Arc::new(log), Arc::new(cycles))),
-            }),
-        ));
-    } else {
-        out.push(Loaded::Entry(e));
-    }
-    for (name, text) in attachments {
-        out.push(load_toml_text(&format!("{shown}#{name}"), &text));
-    }
-    for (i, r) in image_refs.iter().enumerate() {
-        let name = match r.cycle {
-            Some(c) => format!("{shown}#cycle-{c}"),
-            None => format!("{shown}#{i}"),
-        };
-        let meta = ItemMeta {
-            cycle: r.cycle,
-            ..item_meta.clone()
-        };
-        let read = match path {
-            Some(p) => crate::rig::images::read_image(p, r).map_err(|e| one_line(&e.to_string())),
-            None => Err("images of an in-memory log are not decoded".to_string()),
-        };
-        match read {
-            Ok(img) => {
-                let bytes = Arc::new(img.data);
-                let mut l = load_image_bytes(&name, ImageSource::Bytes(bytes.clone()), &bytes);
-                if let Loaded::Image(_, e) = &mut l {
-                    e.meta = meta;
+impl Session {
+    /// Runs, in line, the analysis a pane shows when it has not run yet:
+    /// Vision the inspection of its image, Yield the batch, Overlay the
+    /// comparison of its log (what the TUI's worker does when the pane is
+    /// shown). Returns what ran, for batch reports.
+    pub fn prepare_pane(&mut self, pane: super::PaneId, ui: &super::PaneState) -> Option<String> {
+        use super::PaneId;
+        match pane {
+            PaneId::Vision if !self.images.is_empty() => {
+                let i = ui.vision.image.min(self.images.len() - 1);
+                if self.inspection(i).is_none() {
+                    self.inspect_now(i);
+                    return Some(format!("inspected image {i}"));
                 }
-                out.push(l);
             }
-            Err(m) => out.push(Loaded::Entry(entry(
-                &name,
-                FileKind::Image,
-                FileStatus::Error(m),
-                "",
-            ))),
-        }
-    }
-    out
-}
-
-/// Separates a log's findings in its entry's message (one finding may hold
-/// semicolons of its own).
-pub const FINDING_SEP: &str = " | ";
-
-/// A finding's message without the file name it starts with (the Session
-/// pane lists it under the file already).
-fn strip_file(msg: &str, file: &str) -> String {
-    msg.strip_prefix(file)
-        .map(|r| r.trim_start_matches([':', ' ']).to_string())
-        .unwrap_or_else(|| msg.to_string())
-}
-
-/// Decodes an image (bytes from a file, the demo or a log) into an entry
-/// with a display preview.
-pub fn load_image_bytes(name: &str, source: ImageSource, bytes: &[u8]) -> Loaded {
-    let decoded = std::panic::catch_unwind(|| image::load_from_memory(bytes));
-    match decoded {
-        Ok(Ok(img)) => {
-            let (w, h) = (img.width(), img.height());
-            let preview = if w > 1024 {
-                img.resize(
-                    1024,
-                    1024 * h / w.max(1),
-                    image::imageops::FilterType::Triangle,
-                )
-            } else {
-                img
-            };
-            let detail = format!("{w}×{h} px");
-            Loaded::Image(
-                entry(name, FileKind::Image, FileStatus::Loaded, detail),
-                Box::new(ImageEntry {
-                    name: name.to_string(),
-                    source,
-                    width: w,
-                    height: h,
-                    preview: Some(Arc::new(preview.to_rgb8())),
-                    meta: ItemMeta::default(),
-                }),
-            )
-        }
-        Ok(Err(e)) => Loaded::Entry(entry(
-            name,
-            FileKind::Image,
-            FileStatus::Error(format!("cannot decode image: {e}")),
-            "",
-        )),
-        Err(_) => Loaded::Entry(entry(
-            name,
-            FileKind::Image,
-            FileStatus::Error("cannot decode image: the decoder failed".into()),
-            "",
-        )),
-    }
-}
-
-/// A TOML file: a recipe (`part_number` and `view`), a parameter file, or
-/// an error that says which it looked like.
-pub fn load_toml_text(name: &str, text: &str) -> Loaded {
-    let table: toml::Table = match text.parse() {
-        Ok(t) => t,
-        Err(e) => {
-            return Loaded::Entry(entry(
-                name,
-                FileKind::Unknown,
-                FileStatus::Error(format!("not valid TOML: {}", one_line(&e.to_string()))),
-                "",
-            ));
-        }
-    };
-    if table.contains_key("step") {
-        return Loaded::Entry(entry(
-            name,
-            FileKind::Unknown,
-            FileStatus::Error("this is a batch script: run it with `pinsight batch FILE`".into()),
-            "",
-        ));
-    }
-    if table.contains_key("part_number") || table.contains_key("view") {
-        return match crate::vision::Recipe::from_toml_str(text, name) {
-            Ok(r) => {
-                let view = format!("{:?}", r.view).to_ascii_lowercase();
-                Loaded::Recipe(
-                    entry(
-                        name,
-                        FileKind::Recipe,
-                        FileStatus::Loaded,
-                        format!(
-                            "part {}, {view} view, {}×{} pins",
-                            r.part_number, r.rows, r.cols
-                        ),
-                    ),
-                    Box::new(RecipeEntry {
-                        path: name.to_string(),
-                        part_number: r.part_number.clone(),
-                        view,
-                        recipe: r,
-                    }),
-                )
+            PaneId::Yield if !self.images.is_empty() && self.yields.is_none() => {
+                self.run_yield_now();
+                return Some(format!("yield over {} images", self.images.len()));
             }
-            Err(e) => Loaded::Entry(entry(
-                name,
-                FileKind::Recipe,
-                FileStatus::Error(one_line(&e.msg)),
-                "",
-            )),
-        };
-    }
-    match Params::from_toml_str(text) {
-        Ok(p) => {
-            let detail = format!(
-                "preset {}, {} keys set: clearance {} mm, {} rpm, {}",
-                p.preset,
-                table.len(),
-                p.clearance * 1e3,
-                p.motor_rpm,
-                p.material_name()
-            );
-            Loaded::Params(
-                entry(name, FileKind::Params, FileStatus::Loaded, detail),
-                Box::new(p),
-            )
+            PaneId::Overlay if !self.logs.is_empty() => {
+                let i = ui.overlay.log.min(self.logs.len() - 1);
+                if self.overlay_of(i).is_none() {
+                    self.run_overlay_now(i);
+                    return Some(format!("overlay of log {i}"));
+                }
+            }
+            _ => {}
         }
-        Err(e) => Loaded::Entry(entry(
-            name,
-            FileKind::Params,
-            FileStatus::Error(one_line(&e.to_string())),
-            "",
-        )),
-    }
-}
-
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// Runs the model for the Model, Overlay and Signals panes: the fidelity
-/// assessment (so the user sees which level the scene needs and why), then
-/// the chosen or forced level over the default protocol (2 warm-up + 3
-/// reported revolutions) with curves on a 0.5° grid.
-pub fn run_model(
-    params: &Params,
-    choice: LevelChoice,
-    progress: &Progress,
-) -> Result<ModelRun, String> {
-    params.validate().map_err(|e| e.to_string())?;
-    progress.set_total(2);
-    progress.set_done(0);
-    progress.set_message("fidelity assessment");
-    let fidelity = assess(params, SceneResolution::default(), Method::Dop853);
-    progress.inc(1);
-    if progress.is_cancelled() {
-        return Err("cancelled".into());
-    }
-    let (level, level_reason, fidelity) = match (choice, fidelity) {
-        (LevelChoice::Fixed(l), f) => (l, "forced by the user".to_string(), f.ok()),
-        (LevelChoice::Auto, Ok(f)) => (f.chosen, f.reason.clone(), Some(f)),
-        (LevelChoice::Auto, Err(e)) => (
-            Level::Clearance,
-            format!("the fidelity assessment failed ({e}); running the clearance level"),
-            None,
-        ),
-    };
-    let options = SimOptions {
-        level,
-        grid_deg: Some(0.5),
-        record_events: true,
-        ..SimOptions::default()
-    };
-    progress.set_message(format!("simulating ({} level)", level.name()));
-    let result = simulate(params, &options, progress).map_err(|e| e.to_string())?;
-    progress.inc(1);
-    Ok(ModelRun {
-        params: params.clone(),
-        choice: match choice {
-            LevelChoice::Auto => "auto".into(),
-            LevelChoice::Fixed(l) => l.name().into(),
-        },
-        level,
-        level_reason,
-        options,
-        result,
-        fidelity,
-    })
-}
-
-/// Runs the study (the paper's sweep by default) in parallel.
-pub fn run_study(params: &Params, setup: &StudySetup, progress: &Progress) -> SweepResult {
-    let opts = SimOptions {
-        warmup: setup.warmup,
-        revs: setup.revs,
-        ..SimOptions::default()
-    };
-    progress.set_message(format!("study: {} cases", setup.grid.len()));
-    run_sweep(params, &setup.grid, &opts, progress)
-}
-
-/// Runs the quick methods lab (seconds): work–precision, stability, long
-/// run, step budgets, fidelity map; then the vision lab (localisers' speed
-/// against error, where the pipeline breaks).
-pub fn run_methods(progress: &Progress) -> MethodsLab {
-    let dynamics =
-        crate::methods::dynamics::run_dynamics_lab(crate::methods::Effort::Quick, None, progress);
-    // The vision lab resets the progress total; cancelling stops it too.
-    let vision = if progress.is_cancelled() {
         None
-    } else {
-        Some(crate::vision::lab::run_lab(
-            crate::vision::lab::LabMode::Quick,
-            progress,
-        ))
-    };
-    MethodsLab { dynamics, vision }
-}
+    }
 
-/// Both labs of the Methods pane (the quick effort of `pinsight methods
-/// dynamics` and `pinsight methods vision`).
-#[derive(Debug, Clone)]
-pub struct MethodsLab {
-    pub dynamics: crate::methods::dynamics::DynamicsLab,
-    /// None when the run was cancelled before the vision lab.
-    pub vision: Option<crate::vision::lab::VisionLab>,
+    /// The recipe book of the session.
+    pub fn recipe_book(&self) -> RecipeBook {
+        recipe_book(&self.recipes)
+    }
+
+    /// Records an inspection (replacing an older one of the same image).
+    pub fn set_inspection(&mut self, r: Inspected) {
+        self.inspections.insert(r.image, r);
+    }
+
+    /// The inspection of image `i`, if it ran.
+    pub fn inspection(&self, i: usize) -> Option<&Inspected> {
+        self.inspections.get(&i)
+    }
+
+    /// Inspects image `i` now (batch mode, `render`, tests).
+    pub fn inspect_now(&mut self, i: usize) {
+        if let Some(img) = self.images.get(i) {
+            let r = inspect_image(i, img, &self.recipe_book());
+            self.set_inspection(r);
+        }
+    }
+
+    pub fn set_yield(&mut self, r: YieldRun) {
+        self.yields = Some(r);
+    }
+
+    /// Runs the batch yield now.
+    pub fn run_yield_now(&mut self) {
+        let r = run_yield(&self.images, &self.recipe_book(), &Progress::hidden());
+        self.set_yield(r);
+    }
+
+    pub fn set_overlay(&mut self, r: OverlayRun) {
+        self.overlays.insert(r.log, r);
+    }
+
+    /// The overlay of log `i`, if it ran.
+    pub fn overlay_of(&self, i: usize) -> Option<&OverlayRun> {
+        self.overlays.get(&i)
+    }
+
+    /// Runs the overlay of log `i` now.
+    pub fn run_overlay_now(&mut self, i: usize) {
+        let r = match self.logs.get(i) {
+            Some(LogEntry {
+                rig: Some((log, cycles)),
+                ..
+            }) => run_overlay(i, log, cycles, &Progress::hidden()),
+            Some(l) => OverlayRun {
+                log: i,
+                report: Err(format!("{}: not a rig log (no cycles to compare)", l.path)),
+                wall_ms: 0.0,
+            },
+            None => return,
+        };
+        self.set_overlay(r);
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn toml_kinds_are_told_apart_and_errors_name_the_problem() {
-        let recipe = std::fs::read_to_string(
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/vision/hdr-2x10.toml"),
-        )
-        .unwrap();
-        match load_toml_text("r.toml", &recipe) {
-            Loaded::Recipe(e, r) => {
-                assert_eq!(e.kind, FileKind::Recipe);
-                assert_eq!(r.part_number, "HDR-2x10-2.54");
-            }
-            other => panic!("{other:?}"),
-        }
-        match load_toml_text("p.toml", "preset = \"paper\"\nclearance_mm = 0.3") {
-            Loaded::Params(_, p) => assert!((p.clearance - 0.3e-3).abs() < 1e-12),
-            other => panic!("{other:?}"),
-        }
-        let e = load_toml_text("bad.toml", "clearance_mm = -1");
-        assert!(e.entry().status.is_error(), "{e:?}");
-        let e = load_toml_text("bad.toml", "clearnce_mm = 1");
-        match &e.entry().status {
-            FileStatus::Error(m) => assert!(m.contains("clearance_mm"), "{m}"),
-            s => panic!("{s:?}"),
-        }
-        assert!(load_toml_text("x.toml", "= =").entry().status.is_error());
-        assert!(
-            load_toml_text("s.toml", "[[step]]\nkind=\"load\"")
-                .entry()
-                .status
-                .is_error()
-        );
-    }
+    use crate::engine::load::load_path;
 
     #[test]
     fn missing_unknown_and_corrupt_files_become_errors() {
@@ -1107,7 +305,8 @@ mod tests {
         std::fs::write(&png, b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let r = load_path(&png, &Progress::hidden());
         match &r[0].entry().status {
-            FileStatus::Error(m) => assert!(m.contains("decode"), "{m}"),
+            // The vision decoder's words, as `pinsight inspect` gives them.
+            FileStatus::Error(m) => assert!(m.contains("corrupt or truncated png data"), "{m}"),
             s => panic!("{s:?}"),
         }
         // A folder lists its files; ground-truth JSON is skipped quietly.
@@ -1117,5 +316,11 @@ mod tests {
         let mut s = Session::default();
         s.absorb(r);
         assert_eq!(s.load_errors().len(), 2);
+        // The broken image stays an image of the session, so the yield
+        // counts it as an error item instead of dropping it.
+        assert_eq!(s.images.len(), 1);
+        s.run_yield_now();
+        let y = s.yields.as_ref().unwrap();
+        assert_eq!((y.report.items, y.report.errors), (1, 1));
     }
 }

@@ -4,7 +4,7 @@
 //!
 //! The batch itself ([`crate::vision::batch::run_batch`] and
 //! [`crate::vision::report::YieldReport`]) runs on the TUI's worker with a
-//! gauge and cancel ([`super::analysis::run_yield`]); this view reads its
+//! gauge and cancel ([`crate::engine::vision::run_yield`]); this view reads its
 //! result from the session.
 
 use super::PaneState;

@@ -5,13 +5,12 @@
 //! A job is a plain request ([`JobRequest`]) executed by [`execute`], a
 //! pure function also used by tests to run jobs in line.
 
+use crate::engine::entries::{ImageEntry, Loaded};
+use crate::engine::load::load_path;
+use crate::engine::model::{ModelRun, StudySetup, run_model, run_study};
+use crate::engine::overlay::{OverlayRun, run_overlay};
+use crate::engine::vision::{Inspected, YieldRun, inspect_image, run_yield};
 use crate::model::params::Params;
-use crate::panes::analysis::{
-    Inspected, OverlayRun, YieldRun, inspect_image, run_overlay, run_yield,
-};
-use crate::panes::session::{
-    ImageEntry, Loaded, ModelRun, StudySetup, load_path, run_model, run_study,
-};
 use crate::progress::Progress;
 use crate::rig::RigLog;
 use crate::rig::cycles::CycleSet;
