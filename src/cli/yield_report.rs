@@ -13,7 +13,7 @@
 //! itself failed.
 
 use crate::cli::common::{outln, outp};
-use crate::engine::vision::run_yield_inputs;
+use crate::engine::vision::{YieldInput, run_yield_inputs};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::{self, ItemStatus, RecipeBook};
 use crate::vision::report::{self, GroupBy};
@@ -51,10 +51,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     // The one yield path (engine): unreadable inputs are `error` items.
     let (items, errors) = batch::collect_items(&args.inputs);
-    let inputs: Vec<Result<batch::Item, batch::ItemResult>> = errors
+    let inputs: Vec<YieldInput> = errors
         .into_iter()
-        .map(Err)
-        .chain(items.into_iter().map(Ok))
+        .map(|e| YieldInput::Failed(Box::new(e)))
+        .chain(items.into_iter().map(YieldInput::Image))
         .collect();
     let progress = Progress::new(inputs.len() as u64);
     progress.set_message("inspecting");

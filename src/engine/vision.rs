@@ -93,8 +93,8 @@ fn recipe_note(img: &ImageEntry, book: &RecipeBook, r: &ItemResult) -> String {
 pub fn inspect_image(index: usize, img: &ImageEntry, book: &RecipeBook) -> Inspected {
     let start = Instant::now();
     let (result, gray) = match yield_item(img) {
-        Ok(item) => inspect_item(&item, book, &InspectOptions::default(), true),
-        Err(failed) => (failed, None),
+        YieldInput::Image(item) => inspect_item(&item, book, &InspectOptions::default(), true),
+        YieldInput::Failed(failed) => (*failed, None),
     };
     let annotated = match (&result.inspection, &gray) {
         (Some(ins), Some(g)) => Some(Arc::new(draw_overlay(g, ins, &DrawOptions::default()))),
@@ -109,18 +109,26 @@ pub fn inspect_image(index: usize, img: &ImageEntry, book: &RecipeBook) -> Inspe
     }
 }
 
+/// One input of the yield: an image to inspect, or an item already known
+/// to be an `error` (unreadable, undecodable, a damaged log's lost images).
+#[derive(Debug, Clone)]
+pub enum YieldInput {
+    Image(Item),
+    Failed(Box<ItemResult>),
+}
+
 /// A session image as an input of the yield: the item to inspect, or
 /// (an image that could not be loaded) its `error` result.
-pub fn yield_item(img: &ImageEntry) -> Result<Item, ItemResult> {
+pub fn yield_item(img: &ImageEntry) -> YieldInput {
     match &img.load_error {
-        None => Ok(item_of(img)),
-        Some(e) => Err(ItemResult {
+        None => YieldInput::Image(item_of(img)),
+        Some(e) => YieldInput::Failed(Box::new(ItemResult {
             name: img.name.clone(),
             meta: img.meta.clone(),
             status: ItemStatus::Error,
             error: Some(e.clone()),
             inspection: None,
-        }),
+        })),
     }
 }
 
@@ -128,7 +136,7 @@ pub fn yield_item(img: &ImageEntry) -> Result<Item, ItemResult> {
 /// builds the yield report; images that could not be loaded are `error`
 /// items of the report.
 pub fn run_yield(images: &[ImageEntry], book: &RecipeBook, progress: &Progress) -> YieldRun {
-    let inputs: Vec<Result<Item, ItemResult>> = images.iter().map(yield_item).collect();
+    let inputs: Vec<YieldInput> = images.iter().map(yield_item).collect();
     run_yield_inputs(
         &inputs,
         book,
@@ -138,12 +146,10 @@ pub fn run_yield(images: &[ImageEntry], book: &RecipeBook, progress: &Progress) 
     )
 }
 
-/// The yield over a list of inputs, in their order: each input is an image
-/// to inspect or an item already known to be an `error` (unreadable,
-/// undecodable, a damaged log's lost images). The one function behind
+/// The yield over a list of inputs, in their order. The one function behind
 /// `pinsight yield`, the Yield pane and batch `run yield`.
 pub fn run_yield_inputs(
-    inputs: &[Result<Item, ItemResult>],
+    inputs: &[YieldInput],
     book: &RecipeBook,
     opts: &InspectOptions,
     by: GroupBy,
@@ -152,8 +158,10 @@ pub fn run_yield_inputs(
     let start = Instant::now();
     let items: Vec<Item> = inputs
         .iter()
-        .filter_map(|i| i.as_ref().ok())
-        .cloned()
+        .filter_map(|i| match i {
+            YieldInput::Image(item) => Some(item.clone()),
+            YieldInput::Failed(_) => None,
+        })
         .collect();
     progress.set_total(items.len() as u64);
     progress.set_done(0);
@@ -162,8 +170,8 @@ pub fn run_yield_inputs(
     let results: Vec<ItemResult> = inputs
         .iter()
         .filter_map(|i| match i {
-            Ok(_) => inspected.next(),
-            Err(failed) => Some(failed.clone()),
+            YieldInput::Image(_) => inspected.next(),
+            YieldInput::Failed(failed) => Some((**failed).clone()),
         })
         .collect();
     let report = YieldReport::build(&results, by);
