@@ -14,6 +14,7 @@
 
 pub mod app;
 pub mod draw;
+pub mod image_cache;
 pub mod keys;
 pub mod panes;
 pub mod theme;

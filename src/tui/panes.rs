@@ -1,7 +1,7 @@
 //! Drawing of each pane's view model. Layout and styling only: every
 //! number shown was computed by the pane's view function.
 
-use super::draw::ImageCache;
+use super::image_cache::ImageCache;
 use super::theme::Theme;
 use super::widgets::{
     ChartFrame, bars_lines, block, draw_chart, draw_chart_with, format_value, kv_line, message,
