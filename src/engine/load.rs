@@ -471,10 +471,11 @@ pub fn load_toml_text(name: &str, text: &str) -> Loaded {
                     }),
                 )
             }
+            // The words `pinsight yield` warns with ("invalid recipe FILE: …").
             Err(e) => Loaded::Entry(entry(
                 name,
                 FileKind::Recipe,
-                FileStatus::Error(one_line(&e.msg)),
+                FileStatus::Error(one_line(&e.to_string())),
                 "",
             )),
         };

@@ -6,6 +6,7 @@ use crate::progress::Progress;
 use crate::rig::RigLog;
 use crate::rig::cycles::CycleSet;
 use serde::Serialize;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Measured against predicted for one log.
@@ -13,7 +14,8 @@ use std::time::Instant;
 pub struct OverlayRun {
     /// Index of the log in the session.
     pub log: usize,
-    pub report: Result<OverlayReport, String>,
+    /// Shared with the Overlay pane's view (its JSON carries the whole report).
+    pub report: Result<Arc<OverlayReport>, String>,
     pub wall_ms: f64,
 }
 
@@ -40,6 +42,7 @@ pub fn run_overlay(
                 &OverlayOptions::default(),
                 progress,
             )
+            .map(Arc::new)
             .map_err(|e| e.to_string())
         });
     let report = if progress.is_cancelled() && report.is_err() {

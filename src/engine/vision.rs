@@ -45,7 +45,11 @@ pub struct YieldRun {
 }
 
 /// The recipes of the session as the vision library's recipe book.
-pub fn recipe_book(recipes: &[RecipeEntry]) -> RecipeBook {
+///
+/// `invalid` are the reasons of recipe files that did not validate: as in
+/// `pinsight yield`, an image that then finds no recipe gives them as its
+/// error instead of a bare "no recipe given".
+pub fn recipe_book(recipes: &[RecipeEntry], invalid: Vec<String>) -> RecipeBook {
     // One recipe per part number: the first loaded wins (a log's attached
     // recipe and the same file opened by hand are the same recipe).
     let mut out: Vec<crate::vision::Recipe> = Vec::new();
@@ -54,7 +58,9 @@ pub fn recipe_book(recipes: &[RecipeEntry]) -> RecipeBook {
             out.push(r.recipe.clone());
         }
     }
-    RecipeBook::new(out)
+    let mut book = RecipeBook::new(out);
+    book.invalid = invalid;
+    book
 }
 
 /// An image of the session as a vision batch item.

@@ -76,6 +76,10 @@ pub struct OverlayView {
     pub residuals: Option<crate::overlay::compare::RunResiduals>,
     /// Time the comparison took (JSON only: not drawn, so screens are stable).
     pub wall_ms: Option<f64>,
+    /// The job's whole result, exactly as `pinsight overlay --json` prints it
+    /// (JSON only; shared, not copied, per frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub report: Option<std::sync::Arc<crate::overlay::compare::OverlayReport>>,
 }
 
 impl OverlayView {
@@ -177,6 +181,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
     ));
     v.notes = r.params_notes.iter().chain(&r.notes).cloned().collect();
     v.wall_ms = Some(run.wall_ms);
+    v.report = Some(r.clone());
     let deg = &r.grid_deg;
     let nc = r.cycles.len();
     let sel = ui.overlay.cycle.map(|c| c.min(nc.saturating_sub(1)));

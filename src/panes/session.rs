@@ -227,7 +227,16 @@ impl Session {
 
     /// The recipe book of the session.
     pub fn recipe_book(&self) -> RecipeBook {
-        recipe_book(&self.recipes)
+        let invalid = self
+            .files
+            .iter()
+            .filter(|f| f.kind == FileKind::Recipe)
+            .filter_map(|f| match &f.status {
+                FileStatus::Error(m) => Some(m.clone()),
+                _ => None,
+            })
+            .collect();
+        recipe_book(&self.recipes, invalid)
     }
 
     /// Records an inspection (replacing an older one of the same image).

@@ -69,6 +69,10 @@ pub struct VisionView {
     pub pending: bool,
     pub wall_ms: Option<f64>,
     pub message: Option<String>,
+    /// The job's whole result, exactly as `pinsight inspect --json` gives
+    /// it for this image (JSON only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub result: Option<crate::vision::batch::ItemResult>,
     /// The image to draw: vision's annotated overlay once inspected (grid,
     /// pins coloured by verdict, magnified offsets), else the plain image.
     #[serde(skip)]
@@ -151,6 +155,7 @@ pub fn view(s: &Session, ui: &PaneState) -> VisionView {
         pending: false,
         wall_ms: None,
         message: None,
+        result: None,
         image: img.and_then(|i| i.preview.clone()),
     };
     if n == 0 {
@@ -169,6 +174,7 @@ pub fn view(s: &Session, ui: &PaneState) -> VisionView {
     };
     v.recipe = Some(done.recipe_note.clone());
     v.wall_ms = Some(done.wall_ms);
+    v.result = Some(done.result.clone());
     v.verdict = Some(
         match done.result.status {
             ItemStatus::Pass => "pass",

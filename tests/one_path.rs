@@ -1,0 +1,261 @@
+//! One engine, three faces: the same inputs give the same answer from the
+//! command line (`pinsight <job> --json`), from a pane rendered headless
+//! (`pinsight render <pane> --format json`) and from a batch export of that
+//! pane — for every job a pane shows, with bad inputs in the sets.
+//!
+//! Every comparison is between two runs of the real binary; the only
+//! fields left out are wall-clock times (`wall_ms`), which differ between
+//! any two runs.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pinsight"))
+}
+
+fn repo(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+fn run_json(args: &[&str], dir: &Path) -> Value {
+    let o = bin().args(args).current_dir(dir).output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    serde_json::from_str(&stdout).unwrap_or_else(|e| {
+        panic!(
+            "pinsight {args:?}: not JSON ({e}); exit {:?}\nstdout: {stdout}\nstderr: {}",
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    })
+}
+
+/// Removes every `wall_ms` key (timings differ between any two runs).
+fn without_timings(v: &mut Value) {
+    match v {
+        Value::Object(m) => {
+            m.remove("wall_ms");
+            m.values_mut().for_each(without_timings);
+        }
+        Value::Array(a) => a.iter_mut().for_each(without_timings),
+        _ => {}
+    }
+}
+
+/// A folder with a good image, a zero-byte image, a text file named .png,
+/// the part's recipe, and a recipe that does not validate.
+fn image_set() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::copy(
+        repo("fixtures/interop/images/h2x10-01.jpg"),
+        d.join("good.jpg"),
+    )
+    .unwrap();
+    std::fs::copy(
+        repo("fixtures/interop/images/h2x10-00.png"),
+        d.join("good2.png"),
+    )
+    .unwrap();
+    std::fs::write(d.join("zero-byte.png"), b"").unwrap();
+    std::fs::write(d.join("text-named.png"), b"hello, not an image\n").unwrap();
+    std::fs::copy(
+        repo("fixtures/interop/images/hdr-2x10.toml"),
+        d.join("hdr-2x10.toml"),
+    )
+    .unwrap();
+    dir
+}
+
+fn batch_export(dir: &Path, load: &[&str], pane: &str) -> Value {
+    let paths = load
+        .iter()
+        .map(|p| format!("\"{p}\""))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let script = format!(
+        "[[step]]\nkind = \"load\"\npaths = [{paths}]\n\n[[step]]\nkind = \"export\"\npane = \"{pane}\"\npath = \"{pane}.json\"\n"
+    );
+    std::fs::write(dir.join("script.toml"), script).unwrap();
+    let out = dir.join("batch-out");
+    let o = bin()
+        .arg("batch")
+        .arg(dir.join("script.toml"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let text = std::fs::read_to_string(out.join(format!("{pane}.json"))).unwrap_or_else(|e| {
+        panic!(
+            "batch export of {pane}: {e}\nstdout: {}\nstderr: {}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn yield_is_one_answer_from_cli_render_and_batch_with_unreadable_images() {
+    let dir = image_set();
+    let d = dir.path();
+    // Absolute paths: a batch script names files by their resolved path,
+    // so the items carry the same names whichever face read them.
+    let abs = |f: &str| d.join(f).to_str().unwrap().to_string();
+    let files: Vec<String> = ["good.jpg", "good2.png", "zero-byte.png", "text-named.png"]
+        .map(abs)
+        .to_vec();
+    let recipe = abs("hdr-2x10.toml");
+    let mut args = vec!["yield"];
+    args.extend(files.iter().map(String::as_str));
+    args.extend(["-r", &recipe, "--json"]);
+    let mut cli = run_json(&args, d);
+    let mut render_args = vec!["render", "yield"];
+    render_args.extend(files.iter().map(String::as_str));
+    render_args.extend([recipe.as_str(), "--format", "json"]);
+    let mut render = run_json(&render_args, d)["report"].take();
+    let mut load: Vec<&str> = files.iter().map(String::as_str).collect();
+    load.push(&recipe);
+    let mut batch = batch_export(d, &load, "yield")["report"].take();
+    for v in [&mut cli, &mut render, &mut batch] {
+        without_timings(v);
+    }
+    // The unreadable images are errors, never dropped, in all three.
+    assert_eq!(cli["items"], 4, "{cli:#}");
+    assert_eq!(cli["errors"], 2, "{cli:#}");
+    assert_eq!(cli["inspected"], 2, "{cli:#}");
+    let kinds: Vec<&str> = cli["error_list"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["empty", "not_image"]);
+    assert_eq!(render, cli, "render yield differs from pinsight yield");
+    assert_eq!(batch, cli, "batch export differs from pinsight yield");
+}
+
+#[test]
+fn inspect_is_one_answer_from_cli_and_the_vision_pane() {
+    let dir = image_set();
+    let d = dir.path();
+    let recipe = d.join("hdr-2x10.toml").to_str().unwrap().to_string();
+    for image in ["good.jpg", "zero-byte.png"] {
+        let image = d.join(image).to_str().unwrap().to_string();
+        let (image, recipe) = (image.as_str(), recipe.as_str());
+        let cli = run_json(&["inspect", image, "-r", recipe, "--json"], d);
+        let mut cli = cli.as_array().unwrap()[0].clone();
+        let mut render =
+            run_json(&["render", "vision", image, recipe, "--format", "json"], d)["result"].take();
+        let mut batch = batch_export(d, &[image, recipe], "vision")["result"].take();
+        for v in [&mut cli, &mut render, &mut batch] {
+            without_timings(v);
+        }
+        assert_eq!(render, cli, "{image}: render vision differs from inspect");
+        assert_eq!(batch, cli, "{image}: batch export differs from inspect");
+    }
+}
+
+#[test]
+fn overlay_is_one_answer_from_cli_and_the_overlay_pane_and_a_damaged_log_the_same_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let log = repo("fixtures/interop/logs/run-1200-blocks.mcap");
+    let log = log.to_str().unwrap();
+    let mut cli = run_json(&["overlay", log, "--json"], d);
+    let mut render = run_json(&["render", "overlay", log, "--format", "json"], d)["report"].take();
+    let mut batch = batch_export(d, &[log], "overlay")["report"].take();
+    for v in [&mut cli, &mut render, &mut batch] {
+        without_timings(v);
+    }
+    assert!(
+        cli["cycles"].as_array().unwrap().len() >= 18,
+        "{}",
+        cli["cycles"]
+    );
+    assert_eq!(render, cli, "render overlay differs from pinsight overlay");
+    assert_eq!(batch, cli, "batch export differs from pinsight overlay");
+
+    // A damaged log: the command line's error and the session's entry give
+    // the same reason.
+    let junk = d.join("junk.mcap");
+    std::fs::write(&junk, [0xdfu8; 3000]).unwrap();
+    let o = bin().arg("overlay").arg(&junk).output().unwrap();
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let session = run_json(
+        &[
+            "render",
+            "session",
+            junk.to_str().unwrap(),
+            "--format",
+            "json",
+        ],
+        d,
+    );
+    let entry = &session["files"][0];
+    assert_eq!(entry["status"], "error", "{session:#}");
+    let reason = entry["message"].as_str().unwrap();
+    assert!(reason.contains("not an MCAP file"), "{reason}");
+    assert!(stderr.contains(reason), "CLI: {stderr}\nsession: {reason}");
+}
+
+#[test]
+fn simulate_figures_are_one_answer_from_cli_and_the_model_pane() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cli = run_json(&["simulate", "--json"], d);
+    let render = run_json(&["render", "model", "--format", "json"], d);
+    let batch = batch_export(d, &[], "model");
+    // The physical figures must agree exactly. The work counters differ by
+    // design: the pane also samples curves on a 0.5° grid for its charts
+    // (extra dense-output evaluations).
+    for key in [
+        "n_impacts",
+        "peak_accel_mps2",
+        "peak_contact_force_n",
+        "disp_dev_mean_mm",
+        "disp_dev_max_mm",
+        "vel_dev_mean_mps",
+        "vel_dev_max_mps",
+        "peak_torque_nm",
+        "torque_dev_rms_nm",
+        "stroke_min_mm",
+        "stroke_max_mm",
+        "peak_process_force_n",
+        "clearance_mm",
+        "motor_rpm",
+        "level",
+        "method",
+    ] {
+        assert!(!cli[key].is_null(), "simulate --json has no {key}");
+        assert_eq!(render["summary"][key], cli[key], "render model: {key}");
+        assert_eq!(batch["summary"][key], cli[key], "batch export: {key}");
+    }
+}
+
+#[test]
+fn a_bad_recipe_is_one_answer_from_cli_render_and_batch() {
+    let dir = image_set();
+    let d = dir.path();
+    let good = std::fs::read_to_string(d.join("hdr-2x10.toml")).unwrap();
+    assert!(good.contains("cols = 10"));
+    std::fs::write(d.join("bad.toml"), good.replace("cols = 10", "cols = 0")).unwrap();
+    let image = d.join("good.jpg").to_str().unwrap().to_string();
+    let recipe = d.join("bad.toml").to_str().unwrap().to_string();
+    let mut cli = run_json(&["yield", &image, "-r", &recipe, "--json"], d);
+    let mut render =
+        run_json(&["render", "yield", &image, &recipe, "--format", "json"], d)["report"].take();
+    let mut batch = batch_export(d, &[&image, &recipe], "yield")["report"].take();
+    for v in [&mut cli, &mut render, &mut batch] {
+        without_timings(v);
+    }
+    // The image is an error naming the recipe file and what is wrong in it.
+    let err = &cli["error_list"][0];
+    assert_eq!(err["kind"], "recipe", "{cli:#}");
+    let msg = err["message"].as_str().unwrap();
+    assert!(msg.contains("bad.toml") && msg.contains("cols"), "{msg}");
+    assert_eq!(render, cli, "render yield differs from pinsight yield");
+    assert_eq!(batch, cli, "batch export differs from pinsight yield");
+}
