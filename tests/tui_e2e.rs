@@ -189,6 +189,20 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     let s = t.wait_for("Load errors (2)", 20.0);
     assert!(s.contains("corrupt.mcap"), "{s}");
     assert!(t.pane_state().starts_with('0'), "the TUI must still run");
+    // An unreadable image opened by path: listed as a load error, and the
+    // Yield pane counts it as an error item beside the yield, never dropped.
+    let empty = dir.path().join("unreadable.png");
+    std::fs::write(&empty, b"").unwrap();
+    t.keys(&["o"]);
+    t.wait_for("path:", 10.0);
+    t.literal(&empty.display().to_string());
+    t.keys(&["Enter"]);
+    t.wait_for("Load errors (3)", 20.0);
+    t.keys(&["7"]);
+    let s = t.wait_for("1 error(s)", 30.0);
+    assert!(s.contains("yield 25.0 %"), "{s}");
+    assert!(s.contains("unreadable.png"), "{s}");
+    assert!(t.pane_state().starts_with('0'), "the TUI must still run");
     // Quit.
     t.keys(&["q"]);
     let start = Instant::now();
