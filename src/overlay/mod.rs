@@ -3,4 +3,5 @@
 //! - [`predict`]: the predicted ensemble (band over many simulated revolutions).
 pub mod calibrate;
 pub mod compare;
+pub mod outputs;
 pub mod predict;
