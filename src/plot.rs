@@ -15,7 +15,9 @@ use std::path::Path;
 use std::sync::Once;
 
 /// The font used for every chart.
-static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+/// The one embedded font (DejaVu Sans), shared by the charts and the
+/// annotated vision overlays.
+pub static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 const FONT_NAME: &str = "pinsight-sans";
 
 /// Errors from drawing or writing a chart.

@@ -21,7 +21,7 @@ use imageproc::drawing::{
 };
 use imageproc::rect::Rect;
 
-static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+use crate::plot::FONT;
 
 /// Colour of a status on the overlay (also for the TUI's table).
 pub fn status_colour(s: PinStatus) -> [u8; 3] {
