@@ -9,14 +9,14 @@
 
 use super::common::ParamArgs;
 use crate::cli::common::{outln, outp};
+use crate::engine::overlay::{cycles_of, overlay_job};
 use crate::model::Params;
-use crate::model::kinematics::Geometry;
-use crate::overlay::compare::{OverlayOptions, model_params, overlay};
+use crate::overlay::compare::{OverlayOptions, model_params};
 pub use crate::overlay::outputs::{
     curves_csv, cycles_csv, figures_csv, overlay_panels, run_csv, summary_text, write_outputs,
 };
 use crate::progress::{Progress, ProgressBarGuard};
-use crate::rig::cycles::{CycleOptions, CycleSet, analyse};
+use crate::rig::cycles::CycleSet;
 use crate::rig::{ChannelMap, LoadOptions, RigLog, load};
 use crate::sim::LevelChoice;
 use anyhow::{Context, anyhow, bail};
@@ -135,14 +135,7 @@ pub fn load_and_cycles(
         load(path, opts, &progress).map_err(|e| anyhow!("{e}"))?
     };
     let geom_params = file_params.clone().unwrap_or_else(Params::paper);
-    let cs = analyse(
-        &log,
-        &CycleOptions {
-            geometry: Geometry::of(&geom_params),
-            points_per_rev: points.max(8),
-            ..CycleOptions::default()
-        },
-    );
+    let cs = cycles_of(&log, &geom_params, points);
     if log.signals.displacement.is_none() {
         bail!(
             "{}: no displacement channel ({}): the stroke cannot be compared",
@@ -180,12 +173,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let lopts = load_options(args.channels.as_deref(), &args.meta)?;
     let (log, file_params, cs) =
         load_and_cycles(&args.log, &lopts, &args.params, args.points, !args.json)?;
-    let (params, notes) = model_params(&log, file_params, &args.params.sets)
-        .map_err(|e| anyhow!("{}: {e}", args.log.display()))?;
     let mut extra_notes = Vec::new();
     let level = match level {
         Some(l) => l,
         None => {
+            // The fidelity chooser needs the parameters the job will use.
+            let (params, _) = model_params(&log, file_params.clone(), &args.params.sets)
+                .map_err(|e| anyhow!("{}: model parameters: {e}", log.file))?;
             let f = crate::sim::fidelity::assess(
                 &params,
                 crate::sim::fidelity::SceneResolution {
@@ -213,7 +207,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let progress = Progress::new(0);
     let mut report = {
         let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "overlay"));
-        overlay(&log, &cs, &params, notes, &opts, &progress)?
+        overlay_job(&log, &cs, file_params, &args.params.sets, &opts, &progress)
+            .map_err(anyhow::Error::msg)?
     };
     report.notes.extend(extra_notes);
     if let Some(dir) = &args.out {

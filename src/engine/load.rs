@@ -13,10 +13,9 @@ use super::entries::{
     entry,
 };
 use super::signals::{Channel, SignalSet, channel_name};
-use crate::model::kinematics::Geometry;
 use crate::model::params::Params;
 use crate::progress::Progress;
-use crate::rig::cycles::{CycleOptions, analyse};
+use crate::rig::cycles::CycleOptions;
 use crate::rig::{LoadOptions, LoadStatus, RigLog, Severity};
 use crate::vision::VisionError;
 use crate::vision::batch::{ItemError, ItemMeta};
@@ -167,11 +166,11 @@ pub fn load_log_bytes(name: &str, bytes: &[u8]) -> Vec<Loaded> {
 /// log is a file), its attached recipes.
 fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
     let mut out = Vec::new();
-    let copts = CycleOptions {
-        geometry: Geometry::of(&Params::paper()),
-        ..CycleOptions::default()
-    };
-    let cycles = analyse(&log, &copts);
+    let cycles = super::overlay::cycles_of(
+        &log,
+        &Params::paper(),
+        CycleOptions::default().points_per_rev,
+    );
     let t0 = log.log_start_ns.unwrap_or(0);
     let secs = |t: i64| (t - t0) as f64 * 1e-9;
     let mut channels = Vec::new();

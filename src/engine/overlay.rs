@@ -1,10 +1,12 @@
 //! The overlay job: a log's measured cycles against the model's predicted
 //! ensemble, with parameters from the log's `rig` metadata.
 
+use crate::model::kinematics::Geometry;
+use crate::model::params::Params;
 use crate::overlay::compare::{OverlayOptions, OverlayReport, model_params, overlay};
 use crate::progress::Progress;
 use crate::rig::RigLog;
-use crate::rig::cycles::CycleSet;
+use crate::rig::cycles::{CycleOptions, CycleSet, analyse};
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -19,10 +21,43 @@ pub struct OverlayRun {
     pub wall_ms: f64,
 }
 
-/// Compares a log's cycles with the model's predicted ensemble
-/// (`pinsight::overlay`): parameters from the `paper` preset plus the log's
-/// `rig` metadata (clearance, standoff, material, gear ratio), the
-/// clearance level, each speed group at its logged speed.
+/// A log's cycles delimited with a mechanism's geometry (`points` crank
+/// angles per revolution): what the loader does with the `paper` preset and
+/// `pinsight overlay`/`calibrate` with the parameters given.
+pub fn cycles_of(log: &RigLog, geometry: &Params, points: usize) -> CycleSet {
+    analyse(
+        log,
+        &CycleOptions {
+            geometry: Geometry::of(geometry),
+            points_per_rev: points.max(8),
+            ..CycleOptions::default()
+        },
+    )
+}
+
+/// The overlay job: the model parameters (a parameter file if given, else
+/// the `paper` preset plus the log's `rig` metadata, then `sets`), and the
+/// comparison of every cycle with the predicted ensemble. The one path of
+/// `pinsight overlay`, the Overlay pane, `render overlay` and batch.
+pub fn overlay_job(
+    log: &RigLog,
+    cycles: &CycleSet,
+    file_params: Option<Params>,
+    sets: &[String],
+    opts: &OverlayOptions,
+    progress: &Progress,
+) -> Result<OverlayReport, String> {
+    progress.set_message(format!("overlay: predicting {}", log.file));
+    let (params, notes) = model_params(log, file_params, sets)
+        .map_err(|e| format!("{}: model parameters: {e}", log.file))?;
+    overlay(log, cycles, &params, notes, opts, progress).map_err(|e| e.to_string())
+}
+
+/// Compares a log's cycles with the model's predicted ensemble with the
+/// default options (what the Overlay pane shows): parameters from the
+/// `paper` preset plus the log's `rig` metadata (clearance, standoff,
+/// material, gear ratio), the clearance level, each speed group at its
+/// logged speed.
 pub fn run_overlay(
     index: usize,
     log: &RigLog,
@@ -30,21 +65,8 @@ pub fn run_overlay(
     progress: &Progress,
 ) -> OverlayRun {
     let start = Instant::now();
-    progress.set_message(format!("overlay: predicting {}", log.file));
-    let report = model_params(log, None, &[])
-        .map_err(|e| format!("model parameters from the log's metadata: {e}"))
-        .and_then(|(params, notes)| {
-            overlay(
-                log,
-                cycles,
-                &params,
-                notes,
-                &OverlayOptions::default(),
-                progress,
-            )
-            .map(Arc::new)
-            .map_err(|e| e.to_string())
-        });
+    let report =
+        overlay_job(log, cycles, None, &[], &OverlayOptions::default(), progress).map(Arc::new);
     let report = if progress.is_cancelled() && report.is_err() {
         Err("cancelled".into())
     } else {
