@@ -32,6 +32,9 @@
 //! `scale · raw + offset`.
 
 use super::error::LogError;
+
+/// The camera topic of rig-log.md (the default channel map's `images`).
+pub const CAMERA_TOPIC: &str = "/camera/connector";
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -180,7 +183,7 @@ impl Default for ChannelMap {
                 "mm",
             )),
             cycle: Some(SignalSource::new("/rig/cycle", "index", "")),
-            images: Some(super::images::CAMERA_TOPIC.into()),
+            images: Some(CAMERA_TOPIC.into()),
         }
     }
 }

@@ -18,8 +18,7 @@ use serde::Serialize;
 use std::path::Path;
 use std::sync::Arc;
 
-/// The camera topic of rig-log.md (the default channel map's `images`).
-pub const CAMERA_TOPIC: &str = "/camera/connector";
+pub use super::channel_map::CAMERA_TOPIC;
 
 /// One decoded image.
 #[derive(Debug, Clone, Serialize)]
