@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long = "meta", value_name = "KEY=VALUE")]
     pub meta: Vec<String>,
     /// Simulated revolutions per clearance of the grid.
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, default_value_t = 48, value_parser = super::common::bounds::calibrate_revs)]
     pub revs: usize,
     /// Clearances simulated (mm, comma-separated); the nominal one is added.
     #[arg(long, value_name = "C1,C2,...")]
@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long)]
     pub keep_f_ins: bool,
     /// Crank-angle grid points per revolution.
-    #[arg(long, default_value_t = 720)]
+    #[arg(long, default_value_t = 720, value_parser = super::common::bounds::points)]
     pub points: usize,
 }
 

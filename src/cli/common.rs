@@ -151,3 +151,150 @@ pub fn parse_list_f64(s: &str, what: &str) -> anyhow::Result<Vec<f64>> {
         })
         .collect()
 }
+
+/// Option values bounded by what they mean. Each parser refuses a value
+/// outside its range with the range named, so no option can ask for
+/// gigabytes (`--points 100000000`) or silently become something else
+/// (`--revs 0`). Numbers are read as decimal (no hex).
+pub mod bounds {
+    use crate::model::params::fmt_num;
+
+    fn number(s: &str, what: &str) -> Result<f64, String> {
+        let t = s.trim();
+        if t.is_empty() {
+            return Err(format!("{what}: empty value"));
+        }
+        let x: f64 = t
+            .parse()
+            .map_err(|_| format!("{what}: `{t}` is not a decimal number"))?;
+        if !x.is_finite() {
+            return Err(format!("{what}: `{t}` is not a finite number"));
+        }
+        Ok(x)
+    }
+
+    fn in_range(s: &str, what: &str, lo: f64, hi: f64, lo_open: bool) -> Result<f64, String> {
+        let x = number(s, what)?;
+        let ok = if lo_open { x > lo } else { x >= lo } && x <= hi;
+        if ok {
+            Ok(x)
+        } else {
+            Err(format!(
+                "{what}: {} is outside the allowed range {}{} … {}",
+                fmt_num(x),
+                if lo_open { "above " } else { "" },
+                fmt_num(lo),
+                fmt_num(hi)
+            ))
+        }
+    }
+
+    fn count(s: &str, what: &str, lo: usize, hi: usize) -> Result<usize, String> {
+        let x = number(s, what)?;
+        if x.fract() != 0.0 {
+            return Err(format!("{what}: {} is not a whole number", fmt_num(x)));
+        }
+        if x < lo as f64 || x > hi as f64 {
+            return Err(format!(
+                "{what}: {} is outside the allowed range {lo} … {hi}",
+                fmt_num(x)
+            ));
+        }
+        Ok(x as usize)
+    }
+
+    /// Crank-angle grid points per revolution: 8 (45°) … 7200 (0.05°).
+    pub fn points(s: &str) -> Result<usize, String> {
+        count(s, "points per revolution", 8, 7200)
+    }
+    /// Predicted revolutions of an overlay ensemble.
+    pub fn overlay_revs(s: &str) -> Result<usize, String> {
+        count(s, "predicted revolutions", 2, 10_000)
+    }
+    /// Simulated revolutions of a calibration (per clearance).
+    pub fn calibrate_revs(s: &str) -> Result<usize, String> {
+        count(s, "simulated revolutions", 8, 10_000)
+    }
+    /// Reported revolutions of a simulation (fractional).
+    pub fn revs(s: &str) -> Result<f64, String> {
+        in_range(s, "revolutions", 0.0, 10_000.0, true)
+    }
+    /// Warm-up revolutions (fractional, 0 allowed).
+    pub fn warmup(s: &str) -> Result<f64, String> {
+        in_range(s, "warm-up revolutions", 0.0, 10_000.0, false)
+    }
+    /// Relative tolerance of an adaptive integrator.
+    pub fn rtol(s: &str) -> Result<f64, String> {
+        in_range(s, "relative tolerance", 1e-14, 0.1, false)
+    }
+    /// Absolute tolerance (SI).
+    pub fn atol(s: &str) -> Result<f64, String> {
+        in_range(s, "absolute tolerance", 0.0, 1e-3, false)
+    }
+    /// A fixed step in seconds.
+    pub fn step_s(s: &str) -> Result<f64, String> {
+        in_range(s, "step (s)", 1e-12, 0.1, false)
+    }
+    /// Ensemble realisations.
+    pub fn ensemble(s: &str) -> Result<usize, String> {
+        count(s, "realisations", 1, 10_000)
+    }
+    /// Crank-angle spacing of an output grid in degrees.
+    pub fn grid_deg(s: &str) -> Result<f64, String> {
+        in_range(s, "grid spacing (°)", 0.01, 90.0, false)
+    }
+    /// A resolution (mm or N) of a scene.
+    pub fn resolution(s: &str) -> Result<f64, String> {
+        in_range(s, "resolution", 0.0, 1e6, true)
+    }
+    /// A sensor lag in µs.
+    pub fn lag_us(s: &str) -> Result<f64, String> {
+        in_range(s, "sensor lag (µs)", 0.0, 100_000.0, false)
+    }
+    /// A relative spread (0.01 = 1 %).
+    pub fn fraction(s: &str) -> Result<f64, String> {
+        in_range(s, "relative spread", 0.0, 1.0, false)
+    }
+    /// Magnification of drawn offsets.
+    pub fn magnify(s: &str) -> Result<f64, String> {
+        in_range(s, "magnification", 1.0, 1000.0, false)
+    }
+    /// Worker threads.
+    pub fn jobs(s: &str) -> Result<usize, String> {
+        count(s, "worker threads", 1, 1024)
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        #[test]
+        fn sizes_are_bounded_and_messages_name_the_range() {
+            assert_eq!(points("720"), Ok(720));
+            for bad in [
+                "0",
+                "7",
+                "10000000",
+                "100000000",
+                "1e300",
+                "-5",
+                "0x10",
+                "",
+                "nan",
+                "2.5",
+            ] {
+                let e = points(bad).unwrap_err();
+                assert!(e.starts_with("points per revolution"), "{bad}: {e}");
+            }
+            assert!(points("100000000").unwrap_err().contains("8 … 7200"));
+            assert!(overlay_revs("0").unwrap_err().contains("2 … 10000"));
+            assert!(revs("0").is_err());
+            assert_eq!(revs("0.5"), Ok(0.5));
+            assert_eq!(warmup("0"), Ok(0.0));
+            let e = rtol("1e-300").unwrap_err();
+            assert!(e.contains("1e-300") && e.len() < 120, "{e}");
+            assert!(step_s("inf").unwrap_err().contains("not a finite number"));
+            assert_eq!(jobs("2"), Ok(2));
+        }
+    }
+}

@@ -35,7 +35,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Magnification of pin offsets in the overlays.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = super::common::bounds::magnify)]
     pub magnify: f64,
     /// Centre estimator for top-view tips.
     #[arg(long, value_enum, default_value_t = LocaliserArg::Coverage)]

@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
     /// Crank-angle grid points per revolution.
-    #[arg(long, default_value_t = 720)]
+    #[arg(long, default_value_t = 720, value_parser = super::common::bounds::points)]
     pub points: usize,
     /// List every cycle (default: the first and last five).
     #[arg(long)]

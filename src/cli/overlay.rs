@@ -49,25 +49,25 @@ pub struct Args {
     #[arg(long = "meta", value_name = "KEY=VALUE")]
     pub meta: Vec<String>,
     /// Simulated revolutions in the predicted ensemble (clearance level).
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, value_parser = super::common::bounds::overlay_revs)]
     pub revs: usize,
     /// Revolutions simulated before the ensemble.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = super::common::bounds::warmup)]
     pub warmup: f64,
     /// Integrator relative tolerance of the prediction.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, value_parser = super::common::bounds::rtol)]
     pub rtol: f64,
     /// Relative spread of cycle speeds above which cycles are predicted per speed group (0.01 = 1 %).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, value_parser = super::common::bounds::fraction)]
     pub speed_threshold: f64,
     /// First-order lag of the displacement sensor (µs), applied to the prediction.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::common::bounds::lag_us)]
     pub laser_lag_us: f64,
     /// First-order lag of the load cell (µs), applied to the prediction.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::common::bounds::lag_us)]
     pub force_lag_us: f64,
     /// Crank-angle grid points per revolution.
-    #[arg(long, default_value_t = 720)]
+    #[arg(long, default_value_t = 720, value_parser = super::common::bounds::points)]
     pub points: usize,
 }
 

@@ -34,10 +34,10 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub grid: Option<PathBuf>,
     /// Study protocol: warm-up revolutions per case.
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::bounds::warmup)]
     pub warmup: Option<f64>,
     /// Study protocol: reported revolutions per case.
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::bounds::revs)]
     pub revs: Option<f64>,
     /// Do not run the model or the study first (show the panes as they are before any run).
     #[arg(long)]

@@ -26,22 +26,22 @@ pub struct Args {
     #[arg(long, default_value = "dop853")]
     pub method: String,
     /// Relative tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = super::common::bounds::rtol)]
     pub rtol: f64,
     /// Absolute tolerance, SI (m, m/s).
-    #[arg(long, default_value_t = 1e-14)]
+    #[arg(long, default_value_t = 1e-14, value_parser = super::common::bounds::atol)]
     pub atol: f64,
     /// Fixed step in seconds (RK4: default period/20000; adaptive methods: turns error control off).
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::bounds::step_s)]
     pub step: Option<f64>,
     /// Warm-up revolutions before the reported window (fractional allowed).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = super::common::bounds::warmup)]
     pub warmup: f64,
     /// Reported revolutions (fractional allowed). `--warmup 0 --revs 0.5` is the deterministic window.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = super::common::bounds::revs)]
     pub revs: f64,
     /// Run N realisations from start offsets k·1 nm and report statistics of every figure.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::common::bounds::ensemble)]
     pub ensemble: Option<usize>,
     /// Also estimate the prediction horizon (two realisations 1 nm apart).
     #[arg(long)]
@@ -50,13 +50,13 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Crank-angle spacing of the CSV grid in degrees.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = super::common::bounds::grid_deg)]
     pub grid_deg: f64,
     /// Stroke resolution of the scene for `--level auto`, mm.
-    #[arg(long, default_value_t = 0.002)]
+    #[arg(long, default_value_t = 0.002, value_parser = super::common::bounds::resolution)]
     pub resolution_mm: f64,
     /// Force resolution of the scene for `--level auto`, N.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = super::common::bounds::resolution)]
     pub force_resolution_n: f64,
     /// Print one JSON object instead of the text summary.
     #[arg(long)]

@@ -32,13 +32,13 @@ pub struct Args {
     /// Integrator.
     #[arg(long, default_value = "dop853")]
     pub method: String,
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = super::common::bounds::rtol)]
     pub rtol: f64,
-    #[arg(long, default_value_t = 1e-14)]
+    #[arg(long, default_value_t = 1e-14, value_parser = super::common::bounds::atol)]
     pub atol: f64,
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = super::common::bounds::warmup)]
     pub warmup: f64,
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = super::common::bounds::revs)]
     pub revs: f64,
     /// Output directory for sweep.csv, sweep.json and the PNG charts.
     #[arg(long, default_value = "pinsight-sweep")]

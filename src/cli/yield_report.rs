@@ -40,7 +40,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::bounds::jobs)]
     pub jobs: Option<usize>,
 }
 

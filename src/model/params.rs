@@ -351,6 +351,13 @@ impl Params {
             if !x.is_finite() {
                 return Err(invalid(x.to_string()));
             }
+            // The physical range (a clearance of 0 is the ideal joint).
+            if let Some((lo, hi)) = physical_range(key)
+                && !within(x, lo, hi)
+                && !(key == "clearance_mm" && x == 0.0)
+            {
+                return Err(invalid(fmt_num(x)));
+            }
             Ok(x)
         };
         let text = || -> Result<String, ParamError> {
@@ -483,6 +490,13 @@ impl Params {
             }
             "f_ins_table" | "f_wd_table" => {
                 let pts = pairs(value).ok_or_else(|| invalid(value.to_string()))?;
+                // Physical range: depths within 1000 mm, forces within 1 MN.
+                if let Some(&(d, f)) = pts
+                    .iter()
+                    .find(|(d, f)| !(d.abs() <= 1000.0 && f.abs() <= 1e6))
+                {
+                    return Err(invalid(format!("[{}, {}]", fmt_num(d), fmt_num(f))));
+                }
                 let t = Table::from_mm(&pts).map_err(|msg| ParamError::Invalid {
                     key: key.to_string(),
                     value: format!("{value} ({msg})"),
@@ -507,8 +521,8 @@ impl Params {
                         let mut g = [0.0; 2];
                         for (i, x) in a.iter().enumerate() {
                             g[i] = match x {
-                                toml::Value::Float(f) if f.is_finite() => *f,
-                                toml::Value::Integer(n) => *n as f64,
+                                toml::Value::Float(f) if f.abs() <= 1000.0 => *f,
+                                toml::Value::Integer(n) if n.abs() <= 1000 => *n as f64,
                                 _ => return Err(invalid(value.to_string())),
                             };
                         }
@@ -666,6 +680,16 @@ impl Params {
 
 /// Parses the text of a `--set` value: TOML value syntax, or a bare word as a string.
 pub fn parse_value_text(text: &str) -> toml::Value {
+    // TOML reads 0x10 as 16, 0o10 as 8 and 0b10 as 2: a parameter typed on
+    // the command line means a decimal number, so those stay text (and are
+    // refused with the key's range).
+    let digits = text.trim().trim_start_matches(['+', '-']);
+    if ["0x", "0o", "0b", "0X", "0O", "0B"]
+        .iter()
+        .any(|p| digits.starts_with(p))
+    {
+        return toml::Value::String(text.to_string());
+    }
     let doc = format!("v = {text}");
     match doc.parse::<toml::Table>() {
         Ok(mut t) => t
@@ -693,8 +717,68 @@ fn pairs(value: &toml::Value) -> Option<Vec<(f64, f64)>> {
     }
 }
 
-fn fmt_num(x: f64) -> String {
-    format!("{x}")
+/// A number as a person reads it in a message: at most 6 significant
+/// digits, scientific notation outside 1e-4 … 1e6 (never 300 digits).
+pub fn fmt_num(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let a = x.abs();
+    if (1e-4..1e6).contains(&a) {
+        let digits = 6usize.saturating_sub((a.log10().floor() as i32 + 1).max(0) as usize);
+        let s = format!("{x:.digits$}");
+        let t = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        if t.is_empty() || t == "-" { s } else { t }
+    } else {
+        let s = format!("{x:.5e}");
+        match s.split_once('e') {
+            Some((m, e)) => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            None => s,
+        }
+    }
+}
+
+/// Whether `x` lies in [lo, hi], allowing for the rounding of a unit
+/// conversion (a bound met in metres may come back a few ulps outside it
+/// in millimetres).
+pub fn within(x: f64, lo: f64, hi: f64) -> bool {
+    let slack = 1e-12;
+    x >= lo - slack * lo.abs() && x <= hi + slack * hi.abs()
+}
+
+/// The physical range of a numeric key in its user units (inclusive), for
+/// every key that is a number. Values outside are refused with the range
+/// named: they describe no pin-insertion head, and some (a clearance of
+/// 1e-300 mm, a speed of 1e308 rpm) would only make the integrator spin.
+/// A positive clearance below 0.1 µm is indistinguishable from the ideal
+/// joint (use 0) and would make every free-flight step vanish.
+pub fn physical_range(key: &str) -> Option<(f64, f64)> {
+    Some(match key {
+        "r_mm" => (0.1, 1000.0),
+        "l_mm" => (0.1, 5000.0),
+        "offset_mm" => (-1000.0, 1000.0),
+        "m2_kg" | "m3_kg" | "m4_kg" => (if key == "m2_kg" { 0.0 } else { 1e-4 }, 1000.0),
+        "lc2_mm" => (0.0, 1000.0),
+        "lc3_mm" => (0.0, 5000.0),
+        "i2_kgm2" | "i3_kgm2" => (0.0, 100.0),
+        "rj_mm" => (0.1, 500.0),
+        "clearance_mm" => (1e-4, 10.0),
+        "journal_e_gpa" | "bearing_e_gpa" => (0.1, 1500.0),
+        "journal_nu" | "bearing_nu" => (-0.999, 0.499),
+        "restitution" => (1e-3, 1.0),
+        "approach_velocity_floor_mps" => (1e-9, 10.0),
+        "c_f" => (0.0, 2.0),
+        "mu_g" => (0.0, 0.99),
+        "friction_v0_mps" => (0.0, 10.0),
+        "friction_v1_mps" => (1e-9, 10.0),
+        "motor_rpm" => (1e-9, 60000.0),
+        "gear_ratio" => (1e-3, 1000.0),
+        "standoff_mm" => (0.0, 1000.0),
+        _ => return None,
+    })
 }
 
 /// A parameter value in user units.
@@ -771,51 +855,61 @@ const fn ps(
 
 /// Every parameter key, in listing order.
 pub const PARAM_SPECS: &[ParamSpec] = &[
-    ps("r_mm", "crank length r", "> 0 mm", "geometry"),
+    ps("r_mm", "crank length r", "0.1 … 1000 mm", "geometry"),
     ps(
         "l_mm",
         "connecting rod length l",
-        "> r_mm + |offset_mm| (mm)",
+        "0.1 … 5000 mm, > r_mm + |offset_mm|",
         "geometry",
     ),
     ps(
         "offset_mm",
         "offset of the pin bar's line of motion",
-        "any mm, |offset| < l − r",
+        "−1000 … 1000 mm, |offset| < l − r",
         "geometry",
     ),
-    ps("m2_kg", "crank mass m2", "≥ 0 kg", "masses"),
-    ps("lc2_mm", "crank centroid distance Lc2", "≥ 0 mm", "masses"),
+    ps("m2_kg", "crank mass m2", "0 … 1000 kg", "masses"),
+    ps(
+        "lc2_mm",
+        "crank centroid distance Lc2",
+        "0 … 1000 mm",
+        "masses",
+    ),
     ps(
         "i2_kgm2",
         "crank inertia I2 about its centroid",
-        "≥ 0 kg m²",
+        "0 … 100 kg m²",
         "masses",
     ),
-    ps("m3_kg", "connecting rod mass m3", "> 0 kg", "masses"),
+    ps(
+        "m3_kg",
+        "connecting rod mass m3",
+        "1e-4 … 1000 kg",
+        "masses",
+    ),
     ps(
         "lc3_mm",
         "rod centroid distance Lc3 from the crank pin",
-        "0 … l_mm",
+        "0 … 5000 mm, ≤ l_mm",
         "masses",
     ),
     ps(
         "i3_kgm2",
         "rod inertia I3 about its centroid",
-        "≥ 0 kg m²",
+        "0 … 100 kg m²",
         "masses",
     ),
-    ps("m4_kg", "pin bar mass m4", "> 0 kg", "masses"),
+    ps("m4_kg", "pin bar mass m4", "1e-4 … 1000 kg", "masses"),
     ps(
         "rj_mm",
         "journal radius R_J (bearing R_B = R_J + c)",
-        "> 0 mm",
+        "0.1 … 500 mm",
         "joint",
     ),
     ps(
         "clearance_mm",
         "radial clearance c of the rod–pin-bar joint",
-        "≥ 0 mm (0 = ideal joint)",
+        "0 (ideal joint) or 1e-4 … 10 mm",
         "joint",
     ),
     ps(
@@ -839,25 +933,25 @@ pub const PARAM_SPECS: &[ParamSpec] = &[
     ps(
         "journal_e_gpa",
         "journal Young's modulus E",
-        "> 0 GPa",
+        "0.1 … 1500 GPa",
         "joint",
     ),
     ps(
         "journal_nu",
         "journal Poisson's ratio ν",
-        "−1 < ν < 0.5",
+        "−0.999 … 0.499",
         "joint",
     ),
     ps(
         "bearing_e_gpa",
         "bearing Young's modulus E",
-        "> 0 GPa",
+        "0.1 … 1500 GPa",
         "joint",
     ),
     ps(
         "bearing_nu",
         "bearing Poisson's ratio ν",
-        "−1 < ν < 0.5",
+        "−0.999 … 0.499",
         "joint",
     ),
     ps(
@@ -869,58 +963,58 @@ pub const PARAM_SPECS: &[ParamSpec] = &[
     ps(
         "restitution",
         "coefficient of restitution ce",
-        "0 < ce ≤ 1",
+        "1e-3 … 1",
         "contact",
     ),
     ps(
         "approach_velocity_floor_mps",
         "floor on the onset approach velocity δ̇⁻",
-        "> 0 m/s",
+        "1e-9 … 10 m/s",
         "contact",
     ),
-    ps("c_f", "joint friction coefficient c_f", "≥ 0", "friction"),
+    ps("c_f", "joint friction coefficient c_f", "0 … 2", "friction"),
     ps(
         "mu_g",
         "guide friction coefficient μ_g",
-        "0 ≤ μ_g < 1",
+        "0 … 0.99",
         "friction",
     ),
     ps(
         "friction_v0_mps",
         "friction smoothing: c_d = 0 below v0",
-        "≥ 0 m/s",
+        "0 … 10 m/s",
         "friction",
     ),
     ps(
         "friction_v1_mps",
         "friction smoothing: c_d = 1 above v1",
-        "> friction_v0_mps (m/s)",
+        "1e-9 … 10 m/s, > friction_v0_mps",
         "friction",
     ),
-    ps("motor_rpm", "motor speed", "> 0 rev/min", "drive"),
+    ps("motor_rpm", "motor speed", "1e-9 … 60000 rev/min", "drive"),
     ps(
         "gear_ratio",
         "motor revolutions per crank revolution",
-        "> 0",
+        "1e-3 … 1000",
         "drive",
     ),
     ps("driver", "crank driver", "constant_speed, motor", "drive"),
     ps(
         "standoff_mm",
         "stroke at which the pin meets the part",
-        "≥ 0 mm",
+        "0 … 1000 mm",
         "process",
     ),
     ps(
         "f_ins_table",
         "insertion force against depth, [[mm, N], …]",
-        "depths ≥ 0 strictly increasing, forces ≥ 0",
+        "depths 0 … 1000 mm strictly increasing, forces 0 … 1e6 N",
         "process",
     ),
     ps(
         "f_wd_table",
         "withdrawal force against depth, [[mm, N], …]",
-        "depths ≥ 0 strictly increasing, forces ≥ 0",
+        "depths 0 … 1000 mm strictly increasing, forces 0 … 1e6 N",
         "process",
     ),
     ps(
@@ -932,7 +1026,7 @@ pub const PARAM_SPECS: &[ParamSpec] = &[
     ps(
         "gravity_mps2",
         "gravity vector [x, y] (x = insertion direction)",
-        "two finite numbers, m/s²",
+        "two numbers within ±1000 m/s²",
         "environment",
     ),
 ];

@@ -6,6 +6,7 @@
 //! override any key ([`RigMeta::apply_overrides`]); overridden keys are listed.
 
 use super::report::{Finding, FindingCode, Severity};
+use crate::model::params::{fmt_num, physical_range, within};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -62,6 +63,16 @@ pub struct RigMeta {
     pub overridden: Vec<String>,
 }
 
+/// A metadata value as a message quotes it: numbers read as numbers (no
+/// 300-digit expansions), anything else cut at 40 characters.
+fn short(v: &str) -> String {
+    match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() => fmt_num(x),
+        _ if v.chars().count() > 40 => format!("{}…", v.chars().take(40).collect::<String>()),
+        _ => v.to_string(),
+    }
+}
+
 fn num(
     raw: &BTreeMap<String, String>,
     key: &str,
@@ -80,7 +91,10 @@ fn num(
                 file,
                 None,
                 None,
-                format!("metadata 'rig': {key} = '{v}' is not {what}; ignored"),
+                format!(
+                    "metadata 'rig': {key} = '{}' is not {what}; ignored",
+                    short(v)
+                ),
             ));
             None
         }
@@ -91,7 +105,10 @@ fn num(
                 file,
                 None,
                 None,
-                format!("metadata 'rig': {key} = '{v}' is not a number; ignored"),
+                format!(
+                    "metadata 'rig': {key} = '{}' is not a number; ignored",
+                    short(v)
+                ),
             ));
             None
         }
@@ -117,40 +134,72 @@ impl RigMeta {
             lot: s("lot"),
             ..Default::default()
         };
+        // The model's physical ranges (a log cannot make the solver spin
+        // with a clearance of 1e-300 mm): outside them the value is ignored
+        // with a finding.
+        let phys = |key: &str, x: f64| match physical_range(key) {
+            Some((lo, hi)) => within(x, lo, hi) || (key == "clearance_mm" && x == 0.0),
+            None => true,
+        };
+        let in_range = |key: &str| match physical_range(key) {
+            Some((lo, hi)) => format!("within {} … {}", fmt_num(lo), fmt_num(hi)),
+            None => String::new(),
+        };
         m.clearance_mm = num(
             &raw,
             "clearance_mm",
             file,
             findings,
-            |x| x >= 0.0,
-            "a clearance ≥ 0",
+            |x| phys("clearance_mm", x),
+            &format!("0 or a clearance {} mm", in_range("clearance_mm")),
         );
         m.motor_rpm = num(
             &raw,
             "motor_rpm",
             file,
             findings,
-            |x| x > 0.0,
-            "a positive speed",
+            |x| phys("motor_rpm", x),
+            &format!("a speed {} rpm", in_range("motor_rpm")),
         );
         m.gear_ratio = num(
             &raw,
             "gear_ratio",
             file,
             findings,
-            |x| x > 0.0,
-            "a positive ratio",
+            |x| phys("gear_ratio", x),
+            &format!("a ratio {}", in_range("gear_ratio")),
         );
-        m.standoff_mm = num(&raw, "standoff_mm", file, findings, |_| true, "a length");
-        m.laser_zero_mm = num(&raw, "laser_zero_mm", file, findings, |_| true, "a length");
-        m.force_tare_n = num(&raw, "force_tare_n", file, findings, |_| true, "a force");
+        m.standoff_mm = num(
+            &raw,
+            "standoff_mm",
+            file,
+            findings,
+            |x| phys("standoff_mm", x),
+            &format!("a length {} mm", in_range("standoff_mm")),
+        );
+        m.laser_zero_mm = num(
+            &raw,
+            "laser_zero_mm",
+            file,
+            findings,
+            |x| x.abs() <= 1000.0,
+            "a length within ±1000 mm",
+        );
+        m.force_tare_n = num(
+            &raw,
+            "force_tare_n",
+            file,
+            findings,
+            |x| x.abs() <= 1e6,
+            "a force within ±1e6 N",
+        );
         m.angle_offset_rad = num(
             &raw,
             "angle_offset_rad",
             file,
             findings,
-            |_| true,
-            "an angle",
+            |x| x.abs() <= 100.0,
+            "an angle within ±100 rad",
         );
         if let Some(mat) = &m.material {
             if !MATERIALS.contains(&mat.as_str()) {

@@ -404,6 +404,27 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
     progress.set_total(1000);
     let mut iter: u64 = 0;
     let (mut contact_steps, mut free_steps) = (0u64, 0u64);
+    let budget = |t: f64, what: String| SimError::Budget {
+        t,
+        crank_deg: wrap_deg(ClearanceModel::new(p).theta2(t)),
+        what,
+    };
+    // Projected work: free flight never steps further than
+    // `free_limit_acc`, so a clearance far below any real joint needs more
+    // steps than the budget allows; say so now rather than after minutes.
+    let min_free_steps = (t_end - t) / free_limit_acc;
+    if !(min_free_steps <= opts.max_steps as f64) {
+        return Err(budget(
+            t,
+            format!(
+                "the free-flight step limit √(4c/a) = {:.3e} s needs ≥ {:.3e} steps for {:.3} revolutions (budget {})",
+                free_limit_acc,
+                min_free_steps,
+                opts.warmup + opts.revs,
+                opts.max_steps
+            ),
+        ));
+    }
     while t < t_end {
         iter += 1;
         if iter % 512 == 0 {
@@ -411,6 +432,24 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
                 return Err(SimError::Cancelled);
             }
             progress.set_done((t / t_end * 1000.0) as u64);
+            let wall = start.elapsed().as_secs_f64();
+            if wall > opts.max_wall_s {
+                return Err(budget(
+                    t,
+                    format!("{wall:.1} s of wall time (budget {} s)", opts.max_wall_s),
+                ));
+            }
+        }
+        // Every pass (a step, or a restart at an event) counts: restarts
+        // that make no step must not loop for ever either.
+        if iter > opts.max_steps {
+            return Err(budget(
+                t,
+                format!(
+                    "{iter} steps and event restarts (budget {})",
+                    opts.max_steps
+                ),
+            ));
         }
         let stop = if t < t_rep { t_rep } else { t_end };
         let in_contact = r.model.mode.in_contact;
@@ -433,6 +472,12 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             return Err(r.fail(e));
         }
         let (t0, t1) = (r.st.t_prev(), r.st.t());
+        if !(t1 > t0) {
+            return Err(budget(
+                t0,
+                "no progress: the step fell below the resolution of time (h ≤ 1 ulp of t)".into(),
+            ));
+        }
         if in_contact {
             contact_steps += 1;
         } else {
@@ -673,4 +718,55 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         stats,
         notes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A clearance far below any real joint (validation refuses it; a
+    /// struct can still be built in code) ends with a budget error at once
+    /// instead of spinning: every free-flight step would be ~1e-300 s.
+    #[test]
+    fn a_vanishing_clearance_stops_with_a_budget_error_instead_of_spinning() {
+        for c in [1e-43, 1e-300] {
+            let mut p = Params::paper();
+            p.clearance = c;
+            let opts = SimOptions {
+                warmup: 0.0,
+                revs: 0.5,
+                ..SimOptions::default()
+            };
+            let t0 = Instant::now();
+            let r = run(&p, &opts, &Progress::hidden());
+            let elapsed = t0.elapsed().as_secs_f64();
+            match r {
+                Err(SimError::Budget { what, .. }) => assert!(what.contains("steps"), "{what}"),
+                Err(e) => panic!("c = {c}: expected a budget error, got {e}"),
+                Ok(_) => panic!("c = {c}: a run with this clearance cannot succeed"),
+            }
+            assert!(elapsed < 5.0, "c = {c}: took {elapsed} s");
+        }
+    }
+
+    /// The wall-clock budget stops a run that would take longer.
+    #[test]
+    fn the_wall_clock_budget_stops_a_long_run() {
+        let opts = SimOptions {
+            warmup: 0.0,
+            revs: 1000.0,
+            max_wall_s: 0.05,
+            ..SimOptions::default()
+        };
+        let r = run(&Params::paper(), &opts, &Progress::hidden());
+        match r {
+            Err(SimError::Budget {
+                what, crank_deg, ..
+            }) => {
+                assert!(what.contains("wall time"), "{what}");
+                assert!((0.0..=360.0).contains(&crank_deg));
+            }
+            other => panic!("expected the wall-clock budget to stop the run: {other:?}"),
+        }
+    }
 }

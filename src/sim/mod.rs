@@ -92,7 +92,12 @@ pub struct SimOptions {
     pub event_tol: f64,
     /// Offset of the pin bar's initial position (m), for ensemble realisations.
     pub perturb_x4: f64,
+    /// Work budget of one run: steps (accepted + rejected, and event
+    /// restarts) …
     pub max_steps: u64,
+    /// … and wall-clock seconds. A run over either budget fails with where
+    /// it was (time, crank angle, what ran out) instead of spinning.
+    pub max_wall_s: f64,
     /// Keep the list of contact events.
     pub record_events: bool,
 }
@@ -111,6 +116,7 @@ impl Default for SimOptions {
             event_tol: 1e-9,
             perturb_x4: 0.0,
             max_steps: 50_000_000,
+            max_wall_s: 300.0,
             record_events: false,
         }
     }
@@ -236,6 +242,14 @@ pub enum SimError {
         "too many contact events ({0}) — the contact chatters; loosen event tolerance or check parameters"
     )]
     EventStorm(u64),
+    #[error(
+        "work budget exceeded at t = {t:.9} s (crank angle {crank_deg:.3}°): {what} — the run was stopped instead of spinning; check the parameters (a clearance or contact stiffness far from any real joint) or raise the budget"
+    )]
+    Budget {
+        t: f64,
+        crank_deg: f64,
+        what: String,
+    },
     #[error("cancelled")]
     Cancelled,
 }
