@@ -17,6 +17,8 @@
 //! | [`overlay`] | measured vs predicted per cycle, residuals, calibration |
 //! | [`vision`] | connector images: recipes, pin detection, grid fit, verdicts, yield |
 //! | [`methods`] | the methods lab: work–precision, stability, fidelity |
+//! | [`engine`] | the one layer under the faces: loading every input, running every job |
+//! | [`fmt`] | numbers as messages name them |
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
 //! | [`panes`] | view models: one pure function per pane from session state to plain data |
@@ -31,6 +33,7 @@
 pub mod batch;
 pub mod cli;
 pub mod engine;
+pub mod fmt;
 pub mod methods;
 pub mod model;
 pub mod overlay;

@@ -47,19 +47,19 @@ pub fn parse_size(s: &str) -> Result<(u16, u16), String> {
         .trim()
         .split_once(['x', 'X', '×'])
         .ok_or_else(|| format!("size `{s}`: expected WIDTHxHEIGHT, e.g. 120x40"))?;
-    let w: u16 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("size `{s}`: width is not a number"))?;
-    let h: u16 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("size `{s}`: height is not a number"))?;
+    // Parsed wide, so that a large number is "too large", not "not a number".
+    let num = |x: &str, what: &str| -> Result<u64, String> {
+        x.trim()
+            .parse::<u64>()
+            .map_err(|_| format!("size `{s}`: {what} `{}` is not a whole number", x.trim()))
+    };
+    let (w, h) = (num(w, "width")?, num(h, "height")?);
     if !(20..=1000).contains(&w) || !(6..=1000).contains(&h) {
         return Err(format!(
             "size `{s}`: allowed 20–1000 columns and 6–1000 rows"
         ));
     }
+    let (w, h) = (w as u16, h as u16);
     Ok((w, h))
 }
 

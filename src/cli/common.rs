@@ -91,7 +91,7 @@ impl ParamArgs {
     /// The parameters: preset, then file, then overrides; validated.
     pub fn resolve(&self) -> anyhow::Result<Params> {
         if self.sets.iter().any(|s| s == "help" || s == "?") {
-            bail!("{}", key_listing());
+            return Err(HelpShown(key_listing()).into());
         }
         let mut p = match &self.params {
             Some(path) => {
@@ -126,6 +126,19 @@ impl ParamArgs {
     }
 }
 
+/// A listing the user asked for (`--set help`): printed on stdout with exit
+/// status 0 by `main`, not an error.
+#[derive(Debug)]
+pub struct HelpShown(pub String);
+
+impl std::fmt::Display for HelpShown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for HelpShown {}
+
 /// Every parameter key with its meaning and range.
 pub fn key_listing() -> String {
     let mut out = String::from("parameter keys (use --set key=value or a TOML file):\n");
@@ -157,7 +170,7 @@ pub fn parse_list_f64(s: &str, what: &str) -> anyhow::Result<Vec<f64>> {
 /// gigabytes (`--points 100000000`) or silently become something else
 /// (`--revs 0`). Numbers are read as decimal (no hex).
 pub mod bounds {
-    use crate::model::params::fmt_num;
+    use crate::fmt::fmt_num;
 
     fn number(s: &str, what: &str) -> Result<f64, String> {
         let t = s.trim();

@@ -57,6 +57,20 @@ pub enum Command {
     Batch(batch::Args),
 }
 
+/// An error and its causes on one line, each cause said once: a message
+/// that already quotes its cause (`…: {source}`) does not repeat it.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
+}
+
 /// Entry point of the binary: parses arguments, runs, and turns errors into
 /// a message on stderr and a non-zero exit code (never a panic trace).
 pub fn main() -> ExitCode {
@@ -77,9 +91,34 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        Err(e) if e.downcast_ref::<common::HelpShown>().is_some() => {
+            // Help is not an error: the listing on stdout, exit 0.
+            let _ = common::outln!("{e}");
+            ExitCode::SUCCESS
+        }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             ExitCode::from(2)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_error_quoting_its_cause_says_it_once() {
+        let e = crate::sim::SimError::Integration {
+            source: crate::solver::StepError::NonFinite { t: 0.25 },
+            t: 0.25,
+            crank_deg: 90.0,
+            penetration_um: 0.0,
+            mode: "in free flight",
+        };
+        let text = error_text(&anyhow::Error::new(e));
+        assert_eq!(text.matches("non-finite state").count(), 1, "{text}");
+        let outer = anyhow::Error::msg("inner cause").context("outer");
+        assert_eq!(error_text(&outer), "outer: inner cause");
     }
 }

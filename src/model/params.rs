@@ -9,6 +9,7 @@
 
 use super::materials::Material;
 use super::table::Table;
+pub use crate::fmt::fmt_num;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
@@ -714,30 +715,6 @@ fn pairs(value: &toml::Value) -> Option<Vec<(f64, f64)>> {
             })
             .collect(),
         _ => None,
-    }
-}
-
-/// A number as a person reads it in a message: at most 6 significant
-/// digits, scientific notation outside 1e-4 … 1e6 (never 300 digits).
-pub fn fmt_num(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let a = x.abs();
-    if (1e-4..1e6).contains(&a) {
-        let digits = 6usize.saturating_sub((a.log10().floor() as i32 + 1).max(0) as usize);
-        let s = format!("{x:.digits$}");
-        let t = s.trim_end_matches('0').trim_end_matches('.').to_string();
-        if t.is_empty() || t == "-" { s } else { t }
-    } else {
-        let s = format!("{x:.5e}");
-        match s.split_once('e') {
-            Some((m, e)) => {
-                let m = m.trim_end_matches('0').trim_end_matches('.');
-                format!("{m}e{e}")
-            }
-            None => s,
-        }
     }
 }
 

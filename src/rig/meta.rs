@@ -6,7 +6,8 @@
 //! override any key ([`RigMeta::apply_overrides`]); overridden keys are listed.
 
 use super::report::{Finding, FindingCode, Severity};
-use crate::model::params::{fmt_num, physical_range, within};
+use crate::fmt::fmt_num;
+use crate::model::params::{physical_range, within};
 use serde::Serialize;
 use std::collections::BTreeMap;
 

@@ -53,6 +53,17 @@ pub fn decode_bytes(bytes: &[u8]) -> Result<(Gray, ImageInfo), VisionError> {
         msg: e.to_string(),
     };
 
+    // A header that claims an empty image: say so, in its own numbers
+    // (some decoders call a zero width "too large").
+    if let Some((width, height)) = header_dims(format, bytes)
+        && (width == 0 || height == 0)
+    {
+        return Err(VisionError::TooSmall {
+            width,
+            height,
+            min: MIN_SIDE,
+        });
+    }
     let mut limits = Limits::default();
     // Output buffer (≤ 64 Mpx × 8 bytes) plus decoder working memory.
     limits.max_alloc = Some(768 * 1024 * 1024);
@@ -90,6 +101,18 @@ pub fn decode_bytes(bytes: &[u8]) -> Result<(Gray, ImageInfo), VisionError> {
         e => decode_err(e),
     })?;
     Ok((to_gray(img), info))
+}
+
+/// The width and height a PNG or BMP header claims, read before any decoder
+/// runs (None for other formats or a header too short to hold them).
+fn header_dims(format: image::ImageFormat, b: &[u8]) -> Option<(u32, u32)> {
+    let be = |i: usize| Some(u32::from_be_bytes(b.get(i..i + 4)?.try_into().ok()?));
+    let le = |i: usize| Some(i32::from_le_bytes(b.get(i..i + 4)?.try_into().ok()?));
+    match format {
+        image::ImageFormat::Png => Some((be(16)?, be(20)?)),
+        image::ImageFormat::Bmp => Some((le(18)?.unsigned_abs(), le(22)?.unsigned_abs())),
+        _ => None,
+    }
 }
 
 /// Rec. 709 luma of an RGB triple (any scale).

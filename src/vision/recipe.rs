@@ -13,6 +13,7 @@
 //!   (default 1.0): what counts as an extra (spec: at least a quarter of a
 //!   nominal tip, within one pitch of the housing).
 
+use crate::fmt::fmt_num;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -144,14 +145,37 @@ impl Recipe {
 
     /// Parses and validates recipe text; `source_name` names it in errors.
     pub fn from_toml_str(text: &str, source_name: &str) -> Result<Recipe, RecipeError> {
-        let recipe: Recipe = toml::from_str(text).map_err(|e| RecipeError {
-            source_name: source_name.to_string(),
-            msg: e.to_string().trim().to_string(),
-        })?;
-        recipe.validate().map_err(|msg| RecipeError {
+        let err = |msg: String| RecipeError {
             source_name: source_name.to_string(),
             msg,
-        })?;
+        };
+        // Two-number keys must hold exactly two numbers: the decoder would
+        // otherwise take the first two of a longer list silently.
+        if let Ok(table) = text.parse::<toml::Table>() {
+            let pairs = [
+                ("pitch_mm", table.get("pitch_mm")),
+                (
+                    "tolerance.tip_area",
+                    table
+                        .get("tolerance")
+                        .and_then(|t| t.as_table())
+                        .and_then(|t| t.get("tip_area")),
+                ),
+            ];
+            for (key, v) in pairs {
+                if let Some(toml::Value::Array(a)) = v
+                    && a.len() != 2
+                {
+                    return Err(err(format!(
+                        "{key} must be exactly two numbers (got {} values)",
+                        a.len()
+                    )));
+                }
+            }
+        }
+        let recipe: Recipe =
+            toml::from_str(text).map_err(|e| err(e.to_string().trim().to_string()))?;
+        recipe.validate().map_err(err)?;
         Ok(recipe)
     }
 
@@ -173,14 +197,41 @@ impl Recipe {
                 self.rows, self.cols
             ));
         }
-        if !finite_pos(self.pitch_mm[0]) || !finite_pos(self.pitch_mm[1]) {
-            return Err(format!(
-                "pitch_mm must be two positive numbers (got {:?})",
-                self.pitch_mm
-            ));
+        // Physical ranges (wider than any connector line, far from the
+        // 300-digit numbers and "inf px" a hostile file could ask for).
+        let phys = |key: &str, v: f64, lo: f64, hi: f64, unit: &str| -> Result<(), String> {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{key} = {} is outside {} … {} {unit}",
+                    fmt_num(v),
+                    fmt_num(lo),
+                    fmt_num(hi)
+                ))
+            }
+        };
+        phys("pitch_mm[0]", self.pitch_mm[0], 0.05, 100.0, "mm")?;
+        phys("pitch_mm[1]", self.pitch_mm[1], 0.05, 100.0, "mm")?;
+        phys("pin_mm", self.pin_mm, 0.01, 50.0, "mm")?;
+        if let Some(m) = self.mm_per_px {
+            phys("mm_per_px", m, 1e-4, 10.0, "mm/px")?;
         }
-        if !finite_pos(self.pin_mm) {
-            return Err(format!("pin_mm must be positive (got {})", self.pin_mm));
+        phys(
+            "tolerance.position_mm",
+            self.tolerance.position_mm,
+            1e-4,
+            100.0,
+            "mm",
+        )?;
+        if let Some(h) = self.tolerance.height_mm {
+            phys("tolerance.height_mm", h, 1e-3, 1000.0, "mm")?;
+        }
+        if let Some(h) = self.tolerance.height_tol_mm {
+            phys("tolerance.height_tol_mm", h, 1e-4, 100.0, "mm")?;
+        }
+        if let Some([_, hi]) = self.tolerance.tip_area {
+            phys("tolerance.tip_area[1]", hi, 1.0, 100.0, "")?;
         }
         let min_pitch = if self.rows > 1 {
             self.pitch_mm[0].min(self.pitch_mm[1])
@@ -190,7 +241,8 @@ impl Recipe {
         if (self.cols > 1 || self.rows > 1) && self.pin_mm >= min_pitch {
             return Err(format!(
                 "pin_mm {} is not smaller than the pitch {}: pins would touch",
-                self.pin_mm, min_pitch
+                fmt_num(self.pin_mm),
+                fmt_num(min_pitch)
             ));
         }
         if let Some(m) = self.mm_per_px {
@@ -225,7 +277,9 @@ impl Recipe {
         if let Some([lo, hi]) = t.tip_area {
             if !(lo.is_finite() && hi.is_finite() && (0.0..1.0).contains(&lo) && hi > 1.0) {
                 return Err(format!(
-                    "tolerance.tip_area must be [low, high] with 0 <= low < 1 < high (got [{lo}, {hi}])"
+                    "tolerance.tip_area must be [low, high] with 0 <= low < 1 < high (got [{}, {}])",
+                    fmt_num(lo),
+                    fmt_num(hi)
                 ));
             }
         }

@@ -1,0 +1,45 @@
+//! Numbers in messages: what a person reads in an error or a note, never a
+//! 300-digit expansion of 1e-300 nor "inf px". Shared by every room that
+//! names a value back to the user.
+
+/// A number as a person reads it in a message: at most 6 significant
+/// digits, scientific notation outside 1e-4 … 1e6 (never 300 digits).
+pub fn fmt_num(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let a = x.abs();
+    if (1e-4..1e6).contains(&a) {
+        let digits = 6usize.saturating_sub((a.log10().floor() as i32 + 1).max(0) as usize);
+        let s = format!("{x:.digits$}");
+        let t = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        if t.is_empty() || t == "-" { s } else { t }
+    } else {
+        let s = format!("{x:.5e}");
+        match s.split_once('e') {
+            Some((m, e)) => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            None => s,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_read_as_a_person_writes_them() {
+        assert_eq!(fmt_num(0.0), "0");
+        assert_eq!(fmt_num(0.3), "0.3");
+        assert_eq!(fmt_num(720.0), "720");
+        assert_eq!(fmt_num(1e-300), "1e-300");
+        assert_eq!(fmt_num(1e308), "1e308");
+        assert_eq!(fmt_num(-2.5e-7), "-2.5e-7");
+        assert_eq!(fmt_num(12345.678901), "12345.7");
+        assert_eq!(fmt_num(f64::INFINITY), "inf");
+        assert!(fmt_num(1.0 / 3.0).len() <= 8);
+    }
+}
