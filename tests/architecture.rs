@@ -299,18 +299,58 @@ fn no_import_circle_between_files() {
     );
 }
 
+/// Files over ~800 lines when the rule was written, each with its size then:
+/// the splits along their jobs are open work (docs/architecture.md lists
+/// them). The list may only shrink: a listed file may not grow past its
+/// size, and no other file may pass 800 lines without saying in its opening
+/// comment why it reads best whole.
+const NOT_YET_SPLIT: &[(&str, usize)] = &[
+    ("batch/script.rs", 885),
+    ("methods/dynamics.rs", 1477),
+    ("model/params.rs", 960),
+    ("overlay/calibrate.rs", 946),
+    ("rig/cycles.rs", 1656),
+    ("rig/decode.rs", 835),
+    ("rig/load.rs", 843),
+    ("rig/mcap_read.rs", 1437),
+    ("rig/synth.rs", 890),
+    ("tui/panes.rs", 971),
+];
+
 #[test]
 fn no_file_over_800_lines_without_its_reason() {
     let tree = read_tree();
-    let long: Vec<String> = tree
-        .lines
+    let mut bad = Vec::new();
+    for (p, (n, head)) in &tree.lines {
+        let name = p.display().to_string();
+        let allowed = NOT_YET_SPLIT
+            .iter()
+            .find(|(f, _)| *f == name)
+            .map(|(_, max)| *max);
+        let over = match allowed {
+            Some(max) => *n > max,
+            None => *n > 800 && !head.contains("reads best whole"),
+        };
+        if over {
+            bad.push(format!(
+                "{name} ({n} lines, allowed {})",
+                allowed.unwrap_or(800)
+            ));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "split these along their jobs, or say in the opening comment why each \
+         reads best whole: {bad:#?}"
+    );
+    // The list only shrinks: a listed file that is now short is struck off.
+    let done: Vec<&str> = NOT_YET_SPLIT
         .iter()
-        .filter(|(_, (n, head))| *n > 800 && !head.contains("reads best whole"))
-        .map(|(p, (n, _))| format!("{} ({n} lines)", p.display()))
+        .filter(|(f, _)| tree.lines.get(Path::new(f)).is_none_or(|(n, _)| *n <= 800))
+        .map(|(f, _)| *f)
         .collect();
     assert!(
-        long.is_empty(),
-        "split these along their jobs, or say in the opening comment why each \
-         reads best whole: {long:#?}"
+        done.is_empty(),
+        "these files are split now: strike them off NOT_YET_SPLIT: {done:?}"
     );
 }

@@ -6,6 +6,7 @@ pub mod contact;
 pub mod kinematics;
 pub mod kinetostatics;
 pub mod materials;
+pub mod param_table;
 pub mod params;
 pub mod table;
 
