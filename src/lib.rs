@@ -18,6 +18,7 @@
 //! | [`vision`] | connector images: recipes, pin detection, grid fit, verdicts, yield |
 //! | [`methods`] | the methods lab: work–precision, stability, fidelity |
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
+//! | [`output`] | every file written: atomic single files, multi-file reports complete or unchanged |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
 //! | [`panes`] | view models: one pure function per pane from session state to plain data |
 //! | [`tui`] | the terminal front end (ratatui + crossterm), drawing view models only |
@@ -32,6 +33,7 @@ pub mod batch;
 pub mod cli;
 pub mod methods;
 pub mod model;
+pub mod output;
 pub mod overlay;
 pub mod panes;
 pub mod plot;
