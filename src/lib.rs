@@ -20,6 +20,7 @@
 //! | [`engine`] | the one layer under the faces: loading every input, running every job |
 //! | [`fmt`] | numbers as messages name them |
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
+//! | [`output`] | every file written: atomic single files, multi-file reports complete or unchanged |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
 //! | [`panes`] | view models: one pure function per pane from session state to plain data |
 //! | [`tui`] | the terminal front end (ratatui + crossterm), drawing view models only |
@@ -36,6 +37,7 @@ pub mod engine;
 pub mod fmt;
 pub mod methods;
 pub mod model;
+pub mod output;
 pub mod overlay;
 pub mod panes;
 pub mod plot;

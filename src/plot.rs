@@ -576,7 +576,7 @@ pub fn write_png(
     height: u32,
 ) -> Result<(), PlotError> {
     let bytes = render_png(panels, cols, width, height)?;
-    std::fs::write(path, bytes).map_err(|e| PlotError::Write {
+    crate::output::write_file(path, &bytes).map_err(|e| PlotError::Write {
         path: path.display().to_string(),
         msg: e.to_string(),
     })

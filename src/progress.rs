@@ -16,7 +16,8 @@ use std::time::Duration;
 pub struct Progress {
     done: AtomicU64,
     total: AtomicU64,
-    cancelled: AtomicBool,
+    /// Shared so a signal handler can set it ([`Progress::cancel_on_ctrl_c`]).
+    cancelled: Arc<AtomicBool>,
     message: Mutex<String>,
 }
 
@@ -80,6 +81,19 @@ impl Progress {
 
     pub fn is_cancelled(&self) -> bool {
         self.cancelled.load(Ordering::Relaxed)
+    }
+
+    /// The first Ctrl-C (SIGINT) cancels the work (it stops at its next
+    /// check, writes nothing half-done and says what it wrote); a second
+    /// one exits at once with status 130. Unix only; a no-op elsewhere.
+    pub fn cancel_on_ctrl_c(&self) -> std::io::Result<()> {
+        #[cfg(unix)]
+        {
+            use signal_hook::consts::SIGINT;
+            signal_hook::flag::register_conditional_shutdown(SIGINT, 130, self.cancelled.clone())?;
+            signal_hook::flag::register(SIGINT, self.cancelled.clone())?;
+        }
+        Ok(())
     }
 }
 

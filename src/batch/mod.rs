@@ -87,15 +87,7 @@ pub fn export(
     size: (u16, u16),
     path: &Path,
 ) -> Result<String, String> {
-    if let Some(dir) = path.parent() {
-        if !dir.as_os_str().is_empty() {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-        }
-    }
-    let write = |bytes: &[u8]| {
-        std::fs::write(path, bytes).map_err(|e| format!("cannot write {}: {e}", path.display()))
-    };
+    let write = |bytes: &[u8]| crate::output::write_file(path, bytes).map_err(|e| e.to_string());
     match format {
         Format::Text => {
             write(render_view_text(session, view, size.0, size.1).as_bytes())?;

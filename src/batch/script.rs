@@ -99,11 +99,15 @@ pub struct BatchReport {
     pub checks_passed: usize,
     pub checks_failed: usize,
     pub step_errors: usize,
+    /// Stopped by Ctrl-C before the last step.
+    pub interrupted: bool,
+    /// Files the export steps wrote (each complete: crate::output).
+    pub written: Vec<String>,
 }
 
 impl BatchReport {
     pub fn success(&self) -> bool {
-        self.checks_failed == 0 && self.step_errors == 0
+        self.checks_failed == 0 && self.step_errors == 0 && !self.interrupted
     }
 
     /// The summary table printed at the end of a run.
@@ -148,6 +152,17 @@ impl BatchReport {
             self.step_errors,
             if self.success() { "OK" } else { "FAILED" }
         ));
+        if self.interrupted {
+            out.push_str(&format!(
+                "interrupted (Ctrl-C) after step {}: later steps did not run\n",
+                self.steps.len()
+            ));
+        }
+        if self.written.is_empty() {
+            out.push_str("files written: none\n");
+        } else {
+            out.push_str(&format!("files written: {}\n", self.written.join(", ")));
+        }
         out
     }
 }
@@ -155,10 +170,20 @@ impl BatchReport {
 /// Runs a script file. Err only when the script itself cannot be read or
 /// is not a script; everything else is reported per step.
 pub fn run_file(path: &Path, out_dir: &Path) -> Result<BatchReport, String> {
+    run_file_cancellable(path, out_dir, &Progress::hidden())
+}
+
+/// [`run_file`] that stops between steps once `progress` is cancelled
+/// (Ctrl-C in `pinsight batch`).
+pub fn run_file_cancellable(
+    path: &Path,
+    out_dir: &Path,
+    progress: &Progress,
+) -> Result<BatchReport, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read script {}: {e}", path.display()))?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    run_text(&text, &path.display().to_string(), &base, out_dir)
+    run_text_cancellable(&text, &path.display().to_string(), &base, out_dir, progress)
 }
 
 /// Runs script text; `base` resolves the paths it loads, `out_dir` the
@@ -168,6 +193,17 @@ pub fn run_text(
     name: &str,
     base: &Path,
     out_dir: &Path,
+) -> Result<BatchReport, String> {
+    run_text_cancellable(text, name, base, out_dir, &Progress::hidden())
+}
+
+/// [`run_text`] that checks `progress` for cancellation before each step.
+pub fn run_text_cancellable(
+    text: &str,
+    name: &str,
+    base: &Path,
+    out_dir: &Path,
+    progress: &Progress,
 ) -> Result<BatchReport, String> {
     let doc: toml::Table = text
         .parse()
@@ -198,9 +234,17 @@ pub fn run_text(
         base: base.to_path_buf(),
         out: out_dir.to_path_buf(),
         size,
+        written: Vec::new(),
     };
+    progress.set_total(steps.len() as u64);
     let mut reports = Vec::new();
+    let mut interrupted = false;
     for (i, step) in steps.iter().enumerate() {
+        if progress.is_cancelled() {
+            interrupted = true;
+            break;
+        }
+        progress.set_done(i as u64);
         let index = i + 1;
         let r = match step {
             toml::Value::Table(t) => run.step(index, t),
@@ -221,6 +265,8 @@ pub fn run_text(
         checks_failed: count(Outcome::Fail),
         step_errors: count(Outcome::Error),
         steps: reports,
+        interrupted,
+        written: run.written,
     })
 }
 
@@ -229,6 +275,37 @@ struct Runner {
     base: PathBuf,
     out: PathBuf,
     size: (u16, u16),
+    /// Files written by export steps, in order.
+    written: Vec<String>,
+}
+
+/// An export path resolved inside the output folder: relative, with no
+/// `..`, so a script cannot write outside `--out` (lexical check; a
+/// symlink the user placed inside `--out` is followed).
+pub fn export_path(out: &Path, path: &str) -> Result<PathBuf, String> {
+    use std::path::Component;
+    let p = Path::new(path);
+    if path.trim().is_empty() {
+        return Err("`path` is empty".into());
+    }
+    for c in p.components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            Component::ParentDir => {
+                return Err(format!(
+                    "export path `{path}` leaves the output folder {} (`..` is not allowed)",
+                    out.display()
+                ));
+            }
+            Component::RootDir | Component::Prefix(_) => {
+                return Err(format!(
+                    "export path `{path}` is absolute: give a path inside the output folder {} (set it with --out)",
+                    out.display()
+                ));
+            }
+        }
+    }
+    Ok(out.join(p))
 }
 
 /// Allowed keys per step kind.
@@ -672,7 +749,7 @@ impl Runner {
         let r = (|| -> Result<(String, String), String> {
             let (pane, ui, note) = self.prepare(t)?;
             let path = str_of(t, "path")?.ok_or("give `path`")?;
-            let full = self.out.join(path);
+            let full = export_path(&self.out, path)?;
             let format = match str_of(t, "format")? {
                 Some(f) => Format::parse(f)
                     .ok_or_else(|| format!("format `{f}` (allowed: json, csv, png, text)"))?,
@@ -682,6 +759,7 @@ impl Runner {
             };
             let view = panes::view(pane, &self.session, &ui);
             let what = export(&self.session, &view, format, (ui.width, ui.height), &full)?;
+            self.written.push(full.display().to_string());
             let mut detail = format!("{what} → {}", full.display());
             if let Some(n) = note {
                 detail.push_str(&format!(" ({n})"));
@@ -881,5 +959,55 @@ mod tests {
         assert!(!r.success());
         assert_eq!((r.checks_passed, r.checks_failed, r.step_errors), (3, 1, 3));
         assert!(r.table().contains("FAILED"));
+    }
+
+    #[test]
+    fn export_paths_stay_inside_the_output_folder() {
+        let out = Path::new("/tmp/out");
+        assert_eq!(
+            export_path(out, "a/b.json").unwrap(),
+            Path::new("/tmp/out/a/b.json")
+        );
+        for bad in [
+            "../x.json",
+            "a/../../x.json",
+            "/etc/x.json",
+            "",
+            "../../../../x.json",
+        ] {
+            let e = export_path(out, bad).unwrap_err();
+            assert!(
+                e.contains("output folder") || e.contains("empty"),
+                "{bad}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_cancelled_run_stops_before_the_next_step_and_lists_its_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let script = r#"
+            [[step]]
+            kind = "set"
+            level = "ideal"
+            [[step]]
+            kind = "export"
+            pane = "model"
+            path = "../escape.json"
+        "#;
+        let p = Progress::hidden();
+        let r = run_text_cancellable(script, "s", dir.path(), dir.path(), &p).unwrap();
+        assert_eq!(r.steps[1].outcome, Outcome::Error);
+        assert!(
+            r.steps[1].detail.contains("leaves the output folder"),
+            "{}",
+            r.steps[1].detail
+        );
+        assert!(!dir.path().parent().unwrap().join("escape.json").exists());
+        p.cancel();
+        let r = run_text_cancellable(script, "s", dir.path(), dir.path(), &p).unwrap();
+        assert!(r.interrupted && r.steps.is_empty() && !r.success());
+        assert!(r.table().contains("interrupted"), "{}", r.table());
+        assert!(r.table().contains("files written: none"), "{}", r.table());
     }
 }

@@ -11,7 +11,7 @@ use crate::cli::common::{outln, outp};
 use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport, calibrate};
 use crate::overlay::compare::model_params;
 use crate::progress::{Progress, ProgressBarGuard};
-use anyhow::{Context, anyhow, bail};
+use anyhow::{anyhow, bail};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -75,8 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     report.notes.splice(0..0, notes);
     if let Some(path) = &args.out {
-        std::fs::write(path, &report.params_toml)
-            .with_context(|| format!("writing {}", path.display()))?;
+        crate::output::write_file(path, report.params_toml.as_bytes())?;
     }
     if args.json {
         outln!("{}", serde_json::to_string_pretty(&report)?)?;

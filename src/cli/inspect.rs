@@ -205,8 +205,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 k += 1;
             }
             let path = dir.join(name);
-            img.save(&path)
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            let mut png = std::io::Cursor::new(Vec::new());
+            img.write_to(&mut png, image::ImageFormat::Png)
+                .with_context(|| format!("cannot encode {}", path.display()))?;
+            crate::output::write_file(&path, png.get_ref())?;
         }
         if !args.json {
             write!(out, "{}", text_report(&r))?;
@@ -219,8 +221,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     if let Some(dir) = &args.out {
         let p = dir.join("inspection.json");
-        std::fs::write(&p, serde_json::to_vec_pretty(&results)?)
-            .with_context(|| format!("cannot write {}", p.display()))?;
+        crate::output::write_file(&p, &serde_json::to_vec_pretty(&results)?)?;
     }
     let errors = results
         .iter()

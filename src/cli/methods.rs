@@ -64,7 +64,7 @@ fn run_dynamics(args: &Args, effort: Effort) -> anyhow::Result<ExitCode> {
     };
     let json = serde_json::to_string_pretty(&lab)?;
     let path = args.out.join("dynamics.json");
-    std::fs::write(&path, &json).with_context(|| format!("writing {}", path.display()))?;
+    crate::output::write_file(&path, json.as_bytes())?;
     write_tables(&args.out, &lab)?;
     write_png(
         &args.out.join("work_precision.png"),
@@ -122,7 +122,7 @@ fn run_vision(args: &Args) -> anyhow::Result<ExitCode> {
     };
     let json = serde_json::to_string_pretty(&lab)?;
     let path = args.out.join("vision.json");
-    std::fs::write(&path, &json).with_context(|| format!("writing {}", path.display()))?;
+    crate::output::write_file(&path, json.as_bytes())?;
     write_vision_tables(&args.out, &lab)?;
     write_png(
         &args.out.join("vision_lab.png"),
@@ -153,7 +153,7 @@ fn write_vision_tables(dir: &Path, lab: &VisionLab) -> anyhow::Result<()> {
         ));
     }
     let path = dir.join("vision_speed_accuracy.csv");
-    std::fs::write(&path, w).with_context(|| format!("writing {}", path.display()))?;
+    crate::output::write_file(&path, w.as_bytes())?;
     let mut w = String::from(
         "factor,level,localiser,images,detection_rate,verdict_accuracy,status_accuracy,errors,rms_px\n",
     );
@@ -172,7 +172,7 @@ fn write_vision_tables(dir: &Path, lab: &VisionLab) -> anyhow::Result<()> {
         ));
     }
     let path = dir.join("vision_degradation.csv");
-    std::fs::write(&path, w).with_context(|| format!("writing {}", path.display()))?;
+    crate::output::write_file(&path, w.as_bytes())?;
     Ok(())
 }
 
@@ -260,7 +260,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
             p.failed.as_deref().unwrap_or("").replace('"', "'")
         ));
     }
-    std::fs::write(dir.join("work_precision.csv"), w)?;
+    crate::output::write_file(&dir.join("work_precision.csv"), w.as_bytes())?;
     let mut w = String::from(
         "variant,method,omega_contact,predicted_stable_step_s,measured_stable_step_s,measured_accurate_step_s,failure_beyond\n",
     );
@@ -278,7 +278,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
                 .unwrap_or_default()
         ));
     }
-    std::fs::write(dir.join("stability.csv"), w)?;
+    crate::output::write_file(&dir.join("stability.csv"), w.as_bytes())?;
     let mut w =
         String::from("scene,solver,rtol,rhs_evals,wall_ms,error,error_kind,impacts,failed\n");
     for p in &lab.outside_reference {
@@ -295,7 +295,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
             p.failed.as_deref().unwrap_or("").replace('"', "'")
         ));
     }
-    std::fs::write(dir.join("outside_reference.csv"), w)?;
+    crate::output::write_file(&dir.join("outside_reference.csv"), w.as_bytes())?;
     let mut w = String::from(
         "rtol,horizon_revs,tolerance_horizon_revs,wall_ms,rhs_evals,as_good_as_tightest",
     );
@@ -318,7 +318,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
         }
         w.push('\n');
     }
-    std::fs::write(dir.join("long_run.csv"), w)?;
+    crate::output::write_file(&dir.join("long_run.csv"), w.as_bytes())?;
     let mut w = String::from("clearance_mm,motor_rpm,chosen,stroke_diff_mm,force_diff_n,reason\n");
     for c in &lab.fidelity {
         w.push_str(&format!(
@@ -331,7 +331,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
             c.reason.replace('"', "'")
         ));
     }
-    std::fs::write(dir.join("fidelity.csv"), w)?;
+    crate::output::write_file(&dir.join("fidelity.csv"), w.as_bytes())?;
     Ok(())
 }
 

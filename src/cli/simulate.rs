@@ -123,11 +123,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     drop(_bar);
     if let (Some(path), Some(curves)) = (&args.csv, &result.curves) {
-        let f =
-            std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let mut buf = Vec::new();
         curves
-            .write_csv(std::io::BufWriter::new(f))
+            .write_csv(&mut buf)
             .with_context(|| format!("writing {}", path.display()))?;
+        crate::output::write_file(path, &buf)?;
     }
     if args.json {
         let v = to_json(

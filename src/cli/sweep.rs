@@ -2,7 +2,7 @@
 
 use super::common::{ParamArgs, parse_list_f64};
 use crate::cli::common::outln;
-use crate::plot::write_png;
+use crate::plot::render_png;
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::sim::ensemble::{FIGURES, figure};
 use crate::sim::sweep::{Factor, SweepGrid, SweepResult, run_sweep};
@@ -10,7 +10,7 @@ use crate::sim::{Level, SimOptions};
 use crate::solver::Method;
 use anyhow::{Context, anyhow};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
@@ -92,8 +92,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..SimOptions::default()
     };
     opts.validate()?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    // The report is staged and replaces an older one only when complete.
+    let mut report = crate::output::Report::new_in(&args.out)?;
     let progress = Progress::new(grid.len() as u64);
     let result = {
         let _bar = ProgressBarGuard::start(progress.clone(), "sweep");
@@ -101,22 +101,24 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
     // Write every result we have, then the charts.
     let csv_path = args.out.join("sweep.csv");
-    write_csv(&csv_path, &result)?;
+    let mut csv = Vec::new();
+    write_csv(&mut csv, &result).with_context(|| format!("writing {}", csv_path.display()))?;
+    report.add("sweep.csv", &csv)?;
     let json_path = args.out.join("sweep.json");
     let json = serde_json::to_string_pretty(&result)?;
-    std::fs::write(&json_path, &json)
-        .with_context(|| format!("writing {}", json_path.display()))?;
+    report.add("sweep.json", json.as_bytes())?;
     let mut charts = Vec::new();
     if !args.no_charts {
         for f in Factor::ALL {
-            let path = args.out.join(format!("curves_{}.png", f.name()));
-            write_png(&path, &result.curve_panels(f), 2, 1600, 1100)?;
-            charts.push(path);
-            let path = args.out.join(format!("bars_{}.png", f.name()));
-            write_png(&path, &result.bar_panels(f), 2, 1400, 550)?;
-            charts.push(path);
+            let name = format!("curves_{}.png", f.name());
+            let png = render_png(&result.curve_panels(f), 2, 1600, 1100)?;
+            charts.push(report.add(&name, &png)?);
+            let name = format!("bars_{}.png", f.name());
+            let png = render_png(&result.bar_panels(f), 2, 1400, 550)?;
+            charts.push(report.add(&name, &png)?);
         }
     }
+    report.commit()?;
     if args.json {
         outln!("{json}")?;
     } else {
@@ -186,10 +188,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     })
 }
 
-fn write_csv(path: &Path, r: &SweepResult) -> anyhow::Result<()> {
-    let mut f = std::io::BufWriter::new(
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?,
-    );
+fn write_csv(f: &mut Vec<u8>, r: &SweepResult) -> anyhow::Result<()> {
     write!(f, "clearance_mm,motor_rpm,material,status")?;
     for name in FIGURES {
         write!(f, ",{name}")?;
@@ -228,7 +227,5 @@ fn write_csv(path: &Path, r: &SweepResult) -> anyhow::Result<()> {
         let err = c.error.as_deref().unwrap_or("").replace(['"', '\n'], " ");
         writeln!(f, ",\"{err}\"")?;
     }
-    f.flush()
-        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }

@@ -14,7 +14,7 @@
 
 use super::compare::OverlayReport;
 use crate::plot::{self, LineChart, Panel, Series, SeriesStyle};
-use anyhow::{Context, anyhow};
+use anyhow::anyhow;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -286,12 +286,14 @@ pub fn overlay_panels(r: &OverlayReport, force: bool) -> Vec<Panel> {
     vec![Panel::Line(main), Panel::Line(residual)]
 }
 
-/// Writes every output file into `dir`.
+/// Writes every output file into `dir`: staged, then committed together at
+/// the end (`crate::output`), so a folder holds the old complete report or
+/// the new one, never a mix.
 pub fn write_outputs(dir: &Path, r: &OverlayReport) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let write = |name: &str, text: &str| -> anyhow::Result<()> {
-        let p = dir.join(name);
-        std::fs::write(&p, text).with_context(|| format!("writing {}", p.display()))
+    let mut out = crate::output::Report::new_in(dir)?;
+    let mut write = |name: &str, text: &str| -> anyhow::Result<()> {
+        out.add(name, text.as_bytes())?;
+        Ok(())
     };
     write("overlay.json", &serde_json::to_string_pretty(r)?)?;
     write("cycles.csv", &cycles_csv(r))?;
@@ -304,8 +306,11 @@ pub fn write_outputs(dir: &Path, r: &OverlayReport) -> anyhow::Result<()> {
         }
         let panels = overlay_panels(r, force);
         let p = dir.join(name);
-        plot::write_png(&p, &panels, 1, 1200, 1000).map_err(|e| anyhow!("{}: {e}", p.display()))?;
+        let png = plot::render_png(&panels, 1, 1200, 1000)
+            .map_err(|e| anyhow!("{}: {e}", p.display()))?;
+        out.add(name, &png)?;
     }
+    out.commit()?;
     Ok(())
 }
 

@@ -686,12 +686,12 @@ pub fn write_all(
     results: &[ItemResult],
     title: &str,
 ) -> Result<Vec<String>, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    // Every file is staged first; the old report is replaced only when all
+    // are complete (crate::output).
+    let mut out = crate::output::Report::new_in(dir).map_err(|e| e.to_string())?;
     let mut written = Vec::new();
-    let put = |name: &str, data: &[u8], written: &mut Vec<String>| -> Result<(), String> {
-        let p = dir.join(name);
-        std::fs::write(&p, data).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
-        written.push(p.display().to_string());
+    let mut put = |name: &str, data: &[u8], _: &mut Vec<String>| -> Result<(), String> {
+        out.add(name, data).map_err(|e| e.to_string())?;
         Ok(())
     };
     #[derive(Serialize)]
@@ -710,19 +710,22 @@ pub fn write_all(
     let mut charts = Vec::new();
     for (name, panel) in report.panels() {
         let file = format!("{name}.png");
-        match crate::plot::write_png(&dir.join(&file), std::slice::from_ref(&panel), 1, 900, 500) {
-            Ok(()) => {
-                written.push(dir.join(&file).display().to_string());
-                charts.push((name.replace('_', " "), file));
-            }
-            Err(e) => return Err(e.to_string()),
-        }
+        let png = crate::plot::render_png(std::slice::from_ref(&panel), 1, 900, 500)
+            .map_err(|e| e.to_string())?;
+        put(&file, &png, &mut written)?;
+        charts.push((name.replace('_', " "), file));
     }
     put(
         "yield.md",
         report.markdown(title, &charts).as_bytes(),
         &mut written,
     )?;
+    written.extend(
+        out.commit()
+            .map_err(|e| e.to_string())?
+            .iter()
+            .map(|p| p.display().to_string()),
+    );
     Ok(written)
 }
 
