@@ -35,6 +35,7 @@ pub mod methods;
 pub mod model;
 pub mod overlay;
 pub mod panes;
+pub mod plant;
 pub mod plot;
 pub mod progress;
 pub mod rig;
