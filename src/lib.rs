@@ -17,6 +17,7 @@
 //! | [`overlay`] | measured vs predicted per cycle, residuals, calibration |
 //! | [`vision`] | connector images: recipes, pin detection, grid fit, verdicts, yield |
 //! | [`methods`] | the methods lab: work–precision, stability, fidelity |
+//! | [`plant`] | plant scale: `--shard k/n` partition of a batch (Kubernetes Indexed Jobs, Slurm arrays) |
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
 //! | [`panes`] | view models: one pure function per pane from session state to plain data |
