@@ -19,6 +19,7 @@
 //! | [`methods`] | the methods lab: work–precision, stability, fidelity |
 //! | [`engine`] | the one layer under the faces: loading every input, running every job |
 //! | [`fmt`] | numbers as messages name them |
+//! | [`plant`] | plant scale: `--shard k/n` partition of a batch (Kubernetes Indexed Jobs, Slurm arrays) |
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
 //! | [`output`] | every file written: atomic single files, multi-file reports complete or unchanged |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
@@ -40,6 +41,7 @@ pub mod model;
 pub mod output;
 pub mod overlay;
 pub mod panes;
+pub mod plant;
 pub mod plot;
 pub mod progress;
 pub mod rig;

@@ -40,6 +40,10 @@ pub struct Args {
     /// Centre estimator for top-view tips.
     #[arg(long, value_enum, default_value_t = LocaliserArg::Coverage)]
     pub localiser: LocaliserArg,
+    /// Run only shard K of N (K from 0) of the sorted inputs; default from
+    /// the cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 /// Command-line names of the localisers.
@@ -174,7 +178,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let opts = InspectOptions {
         localiser: args.localiser.into(),
     };
-    let (items, mut results) = batch::collect_items(&args.images);
+    let (items, results) = batch::collect_items(&args.images);
+    let shard =
+        crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    let (items, mut results) = crate::plant::shard::split_collected(shard, items, results);
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }

@@ -42,6 +42,11 @@ pub struct Args {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = super::common::bounds::jobs)]
     pub jobs: Option<usize>,
+    /// Run only shard K of N (K from 0) of the sorted inputs; default from
+    /// PINSIGHT_SHARD, JOB_COMPLETION_INDEX + PINSIGHT_SHARDS, or
+    /// SLURM_ARRAY_TASK_ID + SLURM_ARRAY_TASK_COUNT (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -51,6 +56,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     // The one yield path (engine): unreadable inputs are `error` items.
     let (items, errors) = batch::collect_items(&args.inputs);
+    let shard =
+        crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    let (items, errors) = crate::plant::shard::split_collected(shard, items, errors);
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} input(s)", items.len() + errors.len());
+    }
     let inputs: Vec<YieldInput> = errors
         .into_iter()
         .map(|e| YieldInput::Failed(Box::new(e)))

@@ -1,0 +1,7 @@
+//! Plant scale: one batch split across the machines of a cluster.
+//!
+//! `shard` holds the partition of a batch's inputs (`--shard k/n` and its
+//! defaults from Kubernetes Indexed Jobs and Slurm arrays). It knows nothing
+//! of the terminal; the commands call it on the list they already collected.
+
+pub mod shard;
