@@ -8,6 +8,7 @@
 //!   check steps, with a summary of every check and a failing exit code.
 //! - [`figure`]: reads a figure of a view model by a dotted path.
 
+pub mod export_path;
 pub mod script;
 
 use crate::panes::{self, PaneId, PaneState, PaneView, Session};

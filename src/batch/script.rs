@@ -49,6 +49,7 @@
 //! pane compares its log with the model when they have not run yet; the
 //! study runs only when asked (it is the expensive one).
 
+pub use super::export_path::export_path;
 use super::{Format, export, figure, parse_size};
 use crate::panes::session::{StudySetup, load_path};
 use crate::panes::{self, PaneId, PaneState, Session};
@@ -277,35 +278,6 @@ struct Runner {
     size: (u16, u16),
     /// Files written by export steps, in order.
     written: Vec<String>,
-}
-
-/// An export path resolved inside the output folder: relative, with no
-/// `..`, so a script cannot write outside `--out` (lexical check; a
-/// symlink the user placed inside `--out` is followed).
-pub fn export_path(out: &Path, path: &str) -> Result<PathBuf, String> {
-    use std::path::Component;
-    let p = Path::new(path);
-    if path.trim().is_empty() {
-        return Err("`path` is empty".into());
-    }
-    for c in p.components() {
-        match c {
-            Component::Normal(_) | Component::CurDir => {}
-            Component::ParentDir => {
-                return Err(format!(
-                    "export path `{path}` leaves the output folder {} (`..` is not allowed)",
-                    out.display()
-                ));
-            }
-            Component::RootDir | Component::Prefix(_) => {
-                return Err(format!(
-                    "export path `{path}` is absolute: give a path inside the output folder {} (set it with --out)",
-                    out.display()
-                ));
-            }
-        }
-    }
-    Ok(out.join(p))
 }
 
 /// Allowed keys per step kind.
@@ -878,136 +850,5 @@ fn compare(found: &super::Figure, op: &str, threshold: &toml::Value) -> Result<b
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bad_scripts_and_steps_are_reported_not_fatal() {
-        let dir = tempfile::tempdir().unwrap();
-        assert!(run_text("x = 1", "s", dir.path(), dir.path()).is_err());
-        assert!(run_text("= nope", "s", dir.path(), dir.path()).is_err());
-        let script = r#"
-            [[step]]
-            kind = "teleport"
-            [[step]]
-            kind = "set"
-            values = { clearance_mm = -3 }
-            [[step]]
-            kind = "load"
-            path = "missing.mcap"
-            [[step]]
-            kind = "load"
-            path = "missing.mcap"
-            expect_errors = 1
-            [[step]]
-            kind = "set"
-            values = { clearance_mm = 0.2 }
-            level = "ideal"
-            [[step]]
-            kind = "check"
-            pane = "model"
-            figure = "rows.len"
-            op = ">="
-            value = 30
-            [[step]]
-            kind = "check"
-            pane = "model"
-            figure = "level"
-            op = "=="
-            value = "ideal"
-            [[step]]
-            kind = "check"
-            pane = "model"
-            figure = "summary.no_such_figure"
-            op = "<"
-            value = 1
-            [[step]]
-            kind = "check"
-            pane = "session"
-            figure = "errors.len"
-            op = "=="
-            value = 2
-        "#;
-        let r = run_text(script, "s", dir.path(), dir.path()).unwrap();
-        let o: Vec<Outcome> = r.steps.iter().map(|s| s.outcome).collect();
-        assert_eq!(
-            o,
-            vec![
-                Outcome::Error,
-                Outcome::Error,
-                Outcome::Error,
-                Outcome::Ok,
-                Outcome::Ok,
-                Outcome::Pass,
-                Outcome::Pass,
-                Outcome::Fail,
-                Outcome::Pass,
-            ],
-            "{}",
-            r.table()
-        );
-        assert!(
-            r.steps[1].detail.contains("clearance_mm"),
-            "{}",
-            r.steps[1].detail
-        );
-        assert!(
-            r.steps[7].detail.contains("no `no_such_figure`"),
-            "{}",
-            r.steps[7].detail
-        );
-        assert!(!r.success());
-        assert_eq!((r.checks_passed, r.checks_failed, r.step_errors), (3, 1, 3));
-        assert!(r.table().contains("FAILED"));
-    }
-
-    #[test]
-    fn export_paths_stay_inside_the_output_folder() {
-        let out = Path::new("/tmp/out");
-        assert_eq!(
-            export_path(out, "a/b.json").unwrap(),
-            Path::new("/tmp/out/a/b.json")
-        );
-        for bad in [
-            "../x.json",
-            "a/../../x.json",
-            "/etc/x.json",
-            "",
-            "../../../../x.json",
-        ] {
-            let e = export_path(out, bad).unwrap_err();
-            assert!(
-                e.contains("output folder") || e.contains("empty"),
-                "{bad}: {e}"
-            );
-        }
-    }
-
-    #[test]
-    fn a_cancelled_run_stops_before_the_next_step_and_lists_its_files() {
-        let dir = tempfile::tempdir().unwrap();
-        let script = r#"
-            [[step]]
-            kind = "set"
-            level = "ideal"
-            [[step]]
-            kind = "export"
-            pane = "model"
-            path = "../escape.json"
-        "#;
-        let p = Progress::hidden();
-        let r = run_text_cancellable(script, "s", dir.path(), dir.path(), &p).unwrap();
-        assert_eq!(r.steps[1].outcome, Outcome::Error);
-        assert!(
-            r.steps[1].detail.contains("leaves the output folder"),
-            "{}",
-            r.steps[1].detail
-        );
-        assert!(!dir.path().parent().unwrap().join("escape.json").exists());
-        p.cancel();
-        let r = run_text_cancellable(script, "s", dir.path(), dir.path(), &p).unwrap();
-        assert!(r.interrupted && r.steps.is_empty() && !r.success());
-        assert!(r.table().contains("interrupted"), "{}", r.table());
-        assert!(r.table().contains("files written: none"), "{}", r.table());
-    }
-}
+#[path = "script_tests.rs"]
+mod tests;
