@@ -188,6 +188,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     })
 }
 
+/// A grid value in a CSV cell: as written, but in exponent form far from 1
+/// (a refused 1e-300 is not 300 zeros).
+fn csv_num(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 fn write_csv(f: &mut Vec<u8>, r: &SweepResult) -> anyhow::Result<()> {
     write!(f, "clearance_mm,motor_rpm,material,status")?;
     for name in FIGURES {
@@ -198,8 +208,8 @@ fn write_csv(f: &mut Vec<u8>, r: &SweepResult) -> anyhow::Result<()> {
         write!(
             f,
             "{},{},{},{}",
-            c.clearance_mm,
-            c.motor_rpm,
+            csv_num(c.clearance_mm),
+            csv_num(c.motor_rpm),
             c.material,
             if c.error.is_some() { "error" } else { "ok" }
         )?;
