@@ -57,7 +57,8 @@ pub struct SignalSet {
 }
 
 impl SignalSet {
-    pub fn duration_s(&self) -> f64 {
+    /// First and last sample time over every channel (None: no samples).
+    fn extent(&self) -> Option<(f64, f64)> {
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
         for c in &self.channels {
@@ -66,23 +67,20 @@ impl SignalSet {
                 hi = hi.max(*b);
             }
         }
-        if lo.is_finite() { hi - lo } else { 0.0 }
+        lo.is_finite().then_some((lo, hi))
     }
+
+    pub fn duration_s(&self) -> f64 {
+        self.extent().map_or(0.0, |(lo, hi)| hi - lo)
+    }
+
+    /// The time axis to show: the samples' extent, one second when it is
+    /// a single instant or empty.
     pub fn t_range(&self) -> [f64; 2] {
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for c in &self.channels {
-            if let (Some(a), Some(b)) = (c.t_s.first(), c.t_s.last()) {
-                lo = lo.min(*a);
-                hi = hi.max(*b);
-            }
-        }
-        if lo.is_finite() && hi > lo {
-            [lo, hi]
-        } else if lo.is_finite() {
-            [lo, lo + 1.0]
-        } else {
-            [0.0, 1.0]
+        match self.extent() {
+            Some((lo, hi)) if hi > lo => [lo, hi],
+            Some((lo, _)) => [lo, lo + 1.0],
+            None => [0.0, 1.0],
         }
     }
 }
