@@ -29,12 +29,18 @@ fn yield_cmd(out: &Path, by: &str) -> Command {
     c
 }
 
-/// Visible files of a folder and their bytes (temporaries are hidden).
+/// The user's own file and folder that live in the output folder too.
+const NOTES: &str = "notes.txt";
+const KEEP: &str = "keep";
+
+/// Visible files of a folder and their bytes (temporaries are hidden; the
+/// user's subfolder is checked on its own).
 fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap())
         .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+        .filter(|e| e.file_name() != KEEP)
         .map(|e| {
             (
                 e.file_name().to_string_lossy().into_owned(),
@@ -79,8 +85,12 @@ fn killed_yield_leaves_the_old_or_the_new_report() {
     // Seeded delays over the whole run (SplitMix-like LCG, fixed seed).
     let mut s: u64 = 0x5eed_0014;
     let mut outcomes = (0, 0);
-    for trial in 0..10 {
+    let trials = 24;
+    for trial in 0..trials {
         std::fs::remove_dir_all(&out).ok();
+        std::fs::create_dir_all(out.join(KEEP)).unwrap();
+        std::fs::write(out.join(KEEP).join("a.txt"), b"sub").unwrap();
+        std::fs::write(out.join(NOTES), b"user notes").unwrap();
         assert!(yield_cmd(&out, "lot").status().unwrap().code() != Some(2));
         let old = snapshot(&out);
         assert_eq!(group_by(&old), "lot");
@@ -88,7 +98,13 @@ fn killed_yield_leaves_the_old_or_the_new_report() {
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         let frac = (s >> 11) as f64 / (1u64 << 53) as f64;
-        let delay = full.mul_f64(1.2 * frac);
+        // Half the kills anywhere in the run, half around its end, where
+        // the files are put in place.
+        let delay = if trial % 4 < 2 {
+            full.mul_f64(1.2 * frac)
+        } else {
+            full.mul_f64(0.85 + 0.25 * frac)
+        };
         let mut child = yield_cmd(&out, "part").spawn().unwrap();
         std::thread::sleep(delay);
         let sig = if trial % 2 == 0 { "-KILL" } else { "-INT" };
@@ -109,9 +125,15 @@ fn killed_yield_leaves_the_old_or_the_new_report() {
         } else {
             outcomes.1 += 1;
         }
+        assert_eq!(now[NOTES], b"user notes", "{ctx}: the user's file");
+        assert_eq!(
+            std::fs::read(out.join(KEEP).join("a.txt")).ok().as_deref(),
+            Some(&b"sub"[..]),
+            "{ctx}: the user's subfolder"
+        );
         for (name, bytes) in &now {
             // yield.json holds per-item timings; the rest is deterministic.
-            if name != "yield.json" {
+            if name != "yield.json" && name != NOTES {
                 assert!(
                     bytes == &reference[name],
                     "{ctx}: {name} is not the {version} version: a mix"
@@ -128,9 +150,20 @@ fn killed_yield_leaves_the_old_or_the_new_report() {
             })
             .collect();
         assert!(hidden.is_empty(), "{ctx}: temporaries left: {hidden:?}");
+        let beside: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with('.'))
+            .collect();
+        assert!(beside.is_empty(), "{ctx}: left beside --out: {beside:?}");
+        assert_eq!(
+            std::fs::read(out.join(KEEP).join("a.txt")).ok().as_deref(),
+            Some(&b"sub"[..]),
+            "{ctx}: the user's subfolder after the next run"
+        );
     }
     eprintln!(
-        "10 kills: {} left the old report, {} the new one",
+        "{trials} kills: {} left the old report, {} the new one",
         outcomes.0, outcomes.1
     );
 }

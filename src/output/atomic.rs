@@ -110,27 +110,96 @@ fn stage_error(final_path: &Path, dir: &Path, needed: u64, e: std::io::Error) ->
 /// rename, fsync of the folder. The folder is created if needed. On any
 /// error the old file (if any) is untouched and no temporary remains.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let mut r = Report::new_in(path.parent().unwrap_or(Path::new("")))?;
-    let (_, name) = split(path)?;
-    r.add(&name, bytes)?;
-    r.commit()?;
-    Ok(())
+    let (dir, name) = split(path)?;
+    std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
+    sweep_stale(&dir);
+    let tmp = temp_path(&dir, &name);
+    stage(&tmp, bytes).map_err(|e| stage_error(path, &dir, bytes.len() as u64, e))?;
+    if let Err(e) = std::fs::rename(&tmp, path) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(OutputError::io(path, e));
+    }
+    sync_dir(&dir)
 }
+
+/// How a [`Report`] reaches its folder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommitMode {
+    /// A fresh folder beside `--out`, holding the new files and hard links
+    /// of everything else, exchanged with `--out` in one
+    /// `renameat2(RENAME_EXCHANGE)`: readers see the whole old folder or
+    /// the whole new one.
+    Switch,
+    /// The staged files renamed into `--out` one after the other (each
+    /// file old-or-new; a kill inside the renames can leave a mix). Used
+    /// when a switch cannot be made: `--out` is (or holds) the current
+    /// directory, its parent is not writable, it is a mount point, it holds
+    /// more than [`MAX_CARRIED`] entries, or the filesystem has no
+    /// exchange.
+    Renames,
+}
+
+/// Most entries of `--out` a folder switch carries across (hard links);
+/// above, the report falls back to [`CommitMode::Renames`].
+pub const MAX_CARRIED: usize = 10_000;
 
 /// A multi-file report: stage every file, then [`Report::commit`]. Dropped
 /// without a commit (an error, a panic, an early return) it removes its
-/// temporaries and leaves the folder as it was.
+/// staging folder and leaves `--out` as it was.
+///
+/// Files are staged in a hidden folder: beside `--out`
+/// (`.OUT.pinsight-tmp.PID.N`) when a folder switch is possible, inside it
+/// otherwise. The staging folder holds a marker file named after itself
+/// from its first instant, so a sweep after a kill can tell a staging
+/// folder (delete it) from the old content a switch moved aside (put back
+/// anything `--out` lacks, then delete it).
 #[derive(Debug)]
 pub struct Report {
     dir: PathBuf,
-    /// (temporary, final) pairs, in the order added.
-    staged: Vec<(PathBuf, PathBuf)>,
+    stage: PathBuf,
+    marker: String,
+    mode: CommitMode,
+    /// File names staged, in the order added (the last add of a name wins).
+    staged: Vec<String>,
     staged_bytes: u64,
 }
 
+/// The marker a staging folder named `.X{TMP_MARK}SUFFIX` holds.
+fn marker_name(stage_name: &str) -> Option<String> {
+    let pos = stage_name.find(TMP_MARK)?;
+    Some(format!(".staging{}", &stage_name[pos..]))
+}
+
+/// Whether `dir` is the current directory or one of its ancestors (a
+/// switch would leave this process, or the shell that started it, in a
+/// folder that no longer has a name).
+fn holds_cwd(dir: &Path) -> bool {
+    match std::env::current_dir().and_then(|c| c.canonicalize()) {
+        Ok(cwd) => cwd.starts_with(dir),
+        Err(_) => true,
+    }
+}
+
+/// Creates a staging folder at `path` with its marker first.
+fn make_stage(path: &Path) -> std::io::Result<String> {
+    std::fs::create_dir(path)?;
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or_default();
+    let marker = marker_name(name).unwrap_or_else(|| ".staging".into());
+    if let Err(e) = File::create(path.join(&marker)) {
+        let _ = std::fs::remove_dir_all(path);
+        return Err(e);
+    }
+    Ok(marker)
+}
+
 impl Report {
-    /// A report written into `dir` (created if needed). Temporaries that a
-    /// killed earlier run left there are removed.
+    /// A report written into `dir` (created if needed). What a killed
+    /// earlier run left (temporaries, a staging folder, an old folder
+    /// moved aside) is cleaned up first, putting back anything of the
+    /// user's.
     pub fn new_in(dir: &Path) -> Result<Self, OutputError> {
         let dir = if dir.as_os_str().is_empty() {
             PathBuf::from(".")
@@ -138,9 +207,31 @@ impl Report {
             dir.to_path_buf()
         };
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
+        let abs = dir.canonicalize().map_err(|e| OutputError::io(&dir, e))?;
         sweep_stale(&dir);
+        let parent = abs.parent().filter(|_| !holds_cwd(&abs));
+        let base = abs.file_name().and_then(|n| n.to_str());
+        if let (Some(parent), Some(base)) = (parent, base) {
+            sweep_stale(parent);
+            let stage = temp_path(parent, base);
+            if let Ok(marker) = make_stage(&stage) {
+                return Ok(Report {
+                    dir,
+                    stage,
+                    marker,
+                    mode: CommitMode::Switch,
+                    staged: Vec::new(),
+                    staged_bytes: 0,
+                });
+            }
+        }
+        let stage = temp_path(&dir, "report");
+        let marker = make_stage(&stage).map_err(|e| OutputError::io(&dir, e))?;
         Ok(Report {
             dir,
+            stage,
+            marker,
+            mode: CommitMode::Renames,
             staged: Vec::new(),
             staged_bytes: 0,
         })
@@ -151,11 +242,20 @@ impl Report {
         &self.dir
     }
 
+    /// How the commit will be made (a switch may still fall back to
+    /// renames at commit time; [`Report::commit`] says which happened).
+    pub fn mode(&self) -> CommitMode {
+        self.mode
+    }
+
     /// Stages `name` (a file name in the report's folder) with `bytes`.
     /// Adding the same name twice keeps the last.
     pub fn add(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf, OutputError> {
         let final_path = self.dir.join(name);
-        if name.is_empty() || Path::new(name).file_name() != Some(std::ffi::OsStr::new(name)) {
+        if name.is_empty()
+            || name.contains(TMP_MARK)
+            || Path::new(name).file_name() != Some(std::ffi::OsStr::new(name))
+        {
             return Err(OutputError::io(
                 &final_path,
                 std::io::Error::new(
@@ -164,45 +264,129 @@ impl Report {
                 ),
             ));
         }
-        let tmp = temp_path(&self.dir, name);
+        let tmp = self.stage.join(name);
+        if let Some(i) = self.staged.iter().position(|n| n == name) {
+            self.staged.remove(i);
+            let _ = std::fs::remove_file(&tmp);
+        }
         stage(&tmp, bytes).map_err(|e| {
             // Free what we hold so the figure of free space is the real one.
             let needed = self.staged_bytes + bytes.len() as u64;
             self.discard();
             stage_error(&final_path, &self.dir, needed, e)
         })?;
-        if let Some(i) = self.staged.iter().position(|(_, f)| *f == final_path) {
-            let (old_tmp, _) = self.staged.remove(i);
-            let _ = std::fs::remove_file(old_tmp);
-        }
         self.staged_bytes += bytes.len() as u64;
-        self.staged.push((tmp, final_path.clone()));
+        self.staged.push(name.to_string());
         Ok(final_path)
     }
 
-    /// Renames every staged file over its final name and fsyncs the
-    /// folder; returns the files written, in the order added.
-    pub fn commit(mut self) -> Result<Vec<PathBuf>, OutputError> {
-        let staged = std::mem::take(&mut self.staged);
-        let mut done = Vec::with_capacity(staged.len());
-        for (i, (tmp, fin)) in staged.iter().enumerate() {
-            if let Err(e) = std::fs::rename(tmp, fin) {
-                for (t, _) in &staged[i..] {
-                    let _ = std::fs::remove_file(t);
-                }
-                return Err(OutputError::io(fin, e));
-            }
-            done.push(fin.clone());
+    /// Puts the staged files in place and fsyncs; returns the files
+    /// written, in the order added, and how it was done.
+    pub fn commit_with_mode(mut self) -> Result<(Vec<PathBuf>, CommitMode), OutputError> {
+        let done: Vec<PathBuf> = self.staged.iter().map(|n| self.dir.join(n)).collect();
+        let mut mode = self.mode;
+        if mode == CommitMode::Switch && !self.switch()? {
+            mode = CommitMode::Renames;
+            self.renames()?;
+        } else if mode == CommitMode::Renames {
+            self.renames()?;
         }
-        sync_dir(&self.dir)?;
-        Ok(done)
+        self.staged.clear();
+        self.discard();
+        Ok((done, mode))
     }
 
-    /// Removes every temporary staged so far.
-    fn discard(&mut self) {
-        for (tmp, _) in self.staged.drain(..) {
-            let _ = std::fs::remove_file(tmp);
+    /// Puts the staged files in place; returns the files written, in the
+    /// order added.
+    pub fn commit(self) -> Result<Vec<PathBuf>, OutputError> {
+        self.commit_with_mode().map(|(files, _)| files)
+    }
+
+    /// Renames every staged file into the folder, then fsyncs it.
+    fn renames(&mut self) -> Result<(), OutputError> {
+        for name in &self.staged {
+            let fin = self.dir.join(name);
+            std::fs::rename(self.stage.join(name), &fin).map_err(|e| OutputError::io(&fin, e))?;
         }
+        sync_dir(&self.dir)
+    }
+
+    /// The folder switch. `Ok(false)` when it cannot be made here (the
+    /// caller then renames); the folder is untouched in that case.
+    fn switch(&mut self) -> Result<bool, OutputError> {
+        // Carry everything of the folder the report does not replace.
+        let Ok(rd) = std::fs::read_dir(&self.dir) else {
+            return Ok(false);
+        };
+        let mut carried = 0usize;
+        for e in rd {
+            let Ok(e) = e else { return Ok(false) };
+            let name = e.file_name();
+            let Some(n) = name.to_str() else {
+                return Ok(false);
+            };
+            if n.contains(TMP_MARK) || self.staged.iter().any(|s| s == n) {
+                continue;
+            }
+            carried += 1;
+            if carried > MAX_CARRIED {
+                return Ok(false);
+            }
+            let Ok(ft) = e.file_type() else {
+                return Ok(false);
+            };
+            // Folders cannot be hard-linked: they are moved across after
+            // the switch (and put back by a sweep if we die before).
+            if !ft.is_dir() && std::fs::hard_link(e.path(), self.stage.join(n)).is_err() {
+                return Ok(false);
+            }
+        }
+        if let Ok(meta) = std::fs::metadata(&self.dir) {
+            let _ = std::fs::set_permissions(&self.stage, meta.permissions());
+        }
+        if sync_dir(&self.stage).is_err() {
+            return Ok(false);
+        }
+        let cwd = rustix::fs::CWD;
+        if rustix::fs::renameat_with(
+            cwd,
+            &self.stage,
+            cwd,
+            &self.dir,
+            rustix::fs::RenameFlags::EXCHANGE,
+        )
+        .is_err()
+        {
+            return Ok(false);
+        }
+        // From here `self.stage` names the old folder, `self.dir` the new.
+        let _ = std::fs::remove_file(self.dir.join(&self.marker));
+        let left = restore_missing(&self.stage, &self.dir);
+        sync_dir(&self.dir)?;
+        if let Some(p) = self.stage.parent() {
+            sync_dir(p)?;
+        }
+        if let Err(e) = left {
+            // Keep the old folder rather than lose what could not be moved.
+            let kept = std::mem::take(&mut self.stage);
+            return Err(OutputError::io(
+                &self.dir,
+                std::io::Error::other(format!(
+                    "the report was written, but {e}; the previous folder is kept at {}",
+                    kept.display()
+                )),
+            ));
+        }
+        Ok(true)
+    }
+
+    /// Removes the staging folder (and whatever it holds).
+    fn discard(&mut self) {
+        if !self.stage.as_os_str().is_empty() {
+            let _ = std::fs::remove_dir_all(&self.stage);
+            self.stage = PathBuf::new();
+        }
+        self.staged.clear();
         self.staged_bytes = 0;
     }
 }
@@ -213,9 +397,25 @@ impl Drop for Report {
     }
 }
 
-/// Removes temporaries of processes that no longer run (a SIGKILLed or
-/// crashed earlier write). Best effort: a folder that cannot be read is
-/// left alone.
+/// Moves every entry of `from` that `to` lacks into `to` (folders that
+/// could not be hard-linked, files that appeared during the switch).
+fn restore_missing(from: &Path, to: &Path) -> Result<(), String> {
+    let rd = std::fs::read_dir(from).map_err(|e| format!("{}: {e}", from.display()))?;
+    for e in rd.flatten() {
+        let target = to.join(e.file_name());
+        if std::fs::symlink_metadata(&target).is_err() {
+            std::fs::rename(e.path(), &target)
+                .map_err(|err| format!("{} could not be moved back: {err}", target.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// Cleans what processes that no longer run left in `dir` (a SIGKILLed or
+/// crashed earlier write): temporary files are removed; a staging folder
+/// (it holds its marker) is removed; an old folder a switch moved aside
+/// first gives back what the folder it came from lacks. Best effort: a
+/// folder that cannot be read is left alone.
 fn sweep_stale(dir: &Path) {
     let Ok(rd) = std::fs::read_dir(dir) else {
         return;
@@ -232,9 +432,33 @@ fn sweep_stale(dir: &Path) {
             .and_then(|p| p.parse::<u32>().ok());
         let alive = pid
             .is_some_and(|p| p == std::process::id() || Path::new(&format!("/proc/{p}")).exists());
-        if !alive {
-            let _ = std::fs::remove_file(e.path());
+        if alive {
+            continue;
         }
+        let path = e.path();
+        if !e.file_type().is_ok_and(|t| t.is_dir()) {
+            let _ = std::fs::remove_file(&path);
+            continue;
+        }
+        let is_stage = marker_name(name).is_some_and(|m| path.join(m).exists());
+        // `.BASE.pinsight-tmp…` moved aside from `dir/BASE`.
+        let origin = name
+            .strip_prefix('.')
+            .map(|n| &n[..pos - 1])
+            .filter(|b| !b.is_empty())
+            .map(|b| dir.join(b));
+        if !is_stage {
+            match origin {
+                Some(o) if o.is_dir() => {
+                    if restore_missing(&path, &o).is_err() {
+                        continue;
+                    }
+                }
+                // Nowhere to put it back: keep it for a human.
+                _ => continue,
+            }
+        }
+        let _ = std::fs::remove_dir_all(&path);
     }
 }
 
@@ -330,5 +554,60 @@ mod tests {
         assert!(msg.contains("/out/yield.json"), "{msg}");
         assert!(msg.contains("needed 2500000 bytes"), "{msg}");
         assert!(matches!(e, OutputError::DiskFull { .. }));
+    }
+
+    #[test]
+    fn a_switch_keeps_everything_else_in_the_folder() {
+        let d = tempfile::tempdir().unwrap();
+        let out = d.path().join("out");
+        std::fs::create_dir_all(out.join("sub")).unwrap();
+        std::fs::write(out.join("sub/keep.txt"), b"mine").unwrap();
+        std::fs::write(out.join("notes.txt"), b"user").unwrap();
+        std::fs::write(out.join("a.json"), b"old").unwrap();
+        let mut r = Report::new_in(&out).unwrap();
+        assert_eq!(r.mode(), CommitMode::Switch);
+        r.add("a.json", b"new").unwrap();
+        r.add("b.csv", b"x").unwrap();
+        let (_, mode) = r.commit_with_mode().unwrap();
+        assert_eq!(mode, CommitMode::Switch);
+        assert_eq!(names(&out), vec!["a.json", "b.csv", "notes.txt", "sub"]);
+        assert_eq!(std::fs::read(out.join("a.json")).unwrap(), b"new");
+        assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"user");
+        assert_eq!(std::fs::read(out.join("sub/keep.txt")).unwrap(), b"mine");
+        // Nothing left beside the folder either.
+        assert_eq!(names(d.path()), vec!["out"]);
+    }
+
+    #[test]
+    fn an_old_folder_left_by_a_killed_switch_gives_back_what_is_missing() {
+        let d = tempfile::tempdir().unwrap();
+        let out = d.path().join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("a.json"), b"new").unwrap();
+        // What a switch killed before moving the subfolder back leaves:
+        // the old folder, no marker, under pid 0 (never alive).
+        let old = d.path().join(format!(".out{TMP_MARK}0.3"));
+        std::fs::create_dir_all(old.join("sub")).unwrap();
+        std::fs::write(old.join("sub/keep.txt"), b"mine").unwrap();
+        std::fs::write(old.join("a.json"), b"old").unwrap();
+        // And a staging folder killed while staging (it holds its marker).
+        let stage = d.path().join(format!(".out{TMP_MARK}0.4"));
+        make_stage(&stage).unwrap();
+        std::fs::write(stage.join("a.json"), b"half").unwrap();
+        let r = Report::new_in(&out).unwrap();
+        drop(r);
+        assert_eq!(names(d.path()), vec!["out"]);
+        assert_eq!(names(&out), vec!["a.json", "sub"]);
+        assert_eq!(std::fs::read(out.join("a.json")).unwrap(), b"new");
+        assert_eq!(std::fs::read(out.join("sub/keep.txt")).unwrap(), b"mine");
+    }
+
+    #[test]
+    fn the_current_directory_is_never_switched() {
+        let cwd = std::env::current_dir().unwrap().canonicalize().unwrap();
+        assert!(holds_cwd(&cwd));
+        assert!(holds_cwd(cwd.parent().unwrap()));
+        let d = tempfile::tempdir().unwrap();
+        assert!(!holds_cwd(&d.path().canonicalize().unwrap()));
     }
 }

@@ -4,21 +4,23 @@
 //!   folder, fsynced, renamed over the final name, the folder fsynced. A
 //!   reader (or a crash, Ctrl-C, a full disk) sees the old file or the new
 //!   one, never a truncated mix.
-//! - [`atomic::Report`]: a report of several files (yield, sweep, overlay,
-//!   methods, inspect). Every file is staged as a complete, fsynced
-//!   temporary first; only when all are staged are they renamed over the
-//!   old ones, one after the other (microseconds). A failure or interrupt
-//!   while staging leaves the old report untouched and removes the
-//!   temporaries.
+//! - [`atomic::Report`]: a report of several files (yield, sweep, overlay).
+//!   Every file is staged complete and fsynced in a hidden folder beside
+//!   `--out`, together with hard links of everything else `--out` holds;
+//!   the commit exchanges that folder with `--out` in one
+//!   `renameat2(RENAME_EXCHANGE)`, then moves the user's subfolders across
+//!   and removes the old folder. A reader, a SIGKILL or a power loss sees
+//!   the whole old folder or the whole new one. Where a switch cannot be
+//!   made (`--out` is or holds the current directory, a mount point, an
+//!   unwritable parent, a filesystem without exchange, more than
+//!   [`atomic::MAX_CARRIED`] entries) the staged files are renamed in one
+//!   after the other: each file old-or-new, a kill inside those renames can
+//!   leave a mix (docs/reliability.md).
 //!
-//! Why staged renames rather than a run folder switched at the end: `--out`
-//! is a folder the user names and may hold other things (other reports,
-//! `--out .`); swapping the whole folder would move or copy those too.
-//! The price is the commit window — the renames themselves — where a
-//! SIGKILL or power loss can leave some new files beside some old ones; it
-//! is a few microseconds against the seconds of computing and staging
-//! (docs/reliability.md).
+//! Whatever a killed run leaves (temporaries, a staging folder, the old
+//! folder moved aside) is cleaned by the next write into the same place,
+//! and anything of the user's in it is put back first.
 
 pub mod atomic;
 
-pub use atomic::{OutputError, Report, write_file};
+pub use atomic::{CommitMode, OutputError, Report, write_file};
