@@ -22,6 +22,8 @@
 //! | [`grid`] | lattice estimation and window placement |
 //! | [`top`], [`side`] | the two views' pipelines |
 //! | [`result`] | plain serialisable results |
+//! | [`envelope`] | the promised imaging envelope (ranges) |
+//! | [`synth`], [`synth_envelope`] | synthetic images with exact truth: fixed scenes, and random draws over the whole envelope |
 
 // Comparisons are written `!(a > b)` on purpose throughout: they are true
 // for NaN too, so a degenerate measurement takes the safe branch.
@@ -29,6 +31,7 @@
 
 pub mod batch;
 pub mod detect;
+pub mod envelope;
 pub mod error;
 pub mod fit;
 pub mod gray;
@@ -44,6 +47,7 @@ pub mod report;
 pub mod result;
 pub mod side;
 pub mod synth;
+pub mod synth_envelope;
 pub mod top;
 pub mod truth;
 
