@@ -33,6 +33,15 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .map(std::path::PathBuf::from);
     let list = args.iter().any(|a| a == "--list");
+    if let Some(seed) = args
+        .iter()
+        .position(|a| a == "--show")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|s| s.parse::<u64>().ok())
+    {
+        show(seed);
+        return;
+    }
     if let Some(d) = &save {
         std::fs::create_dir_all(d).expect("create --save dir");
     }
@@ -263,4 +272,61 @@ fn line(label: &str, sel: &[&Outcome]) {
         pct(right, n),
         pct(pins - pw, pins)
     );
+}
+
+/// One case in detail: factors, truth, and the inspection.
+fn show(seed: u64) {
+    let case = EnvelopeCase::draw(seed);
+    let r = case.render().expect("render");
+    println!(
+        "{}",
+        serde_json::to_string(&case.factors).unwrap_or_default()
+    );
+    println!(
+        "recipe: {}",
+        toml::to_string(&case.recipe).unwrap_or_default()
+    );
+    match vision::inspect_gray(
+        &case.recipe,
+        &r.gray,
+        r.info.clone(),
+        &InspectOptions::default(),
+    ) {
+        Err(e) => println!("ERROR {e}"),
+        Ok(ins) => {
+            println!(
+                "verdict {:?} (truth {:?}); grid {:?}",
+                ins.verdict, r.truth.verdict, ins.grid
+            );
+            for (p, t) in ins.pins.iter().zip(&r.truth.pins) {
+                println!(
+                    "  ({},{}) {:?} (truth {:?}) at {:?},{:?} truth {:?},{:?} nominal {:.1},{:.1} area {:?} off {:?}",
+                    p.row,
+                    p.col,
+                    p.status,
+                    t.defect,
+                    p.x_px.map(|v| (v * 100.0).round() / 100.0),
+                    p.y_px.map(|v| (v * 100.0).round() / 100.0),
+                    t.x_px.map(|v| (v * 100.0).round() / 100.0),
+                    t.y_px.map(|v| (v * 100.0).round() / 100.0),
+                    p.nominal_x_px,
+                    p.nominal_y_px,
+                    p.area_ratio,
+                    p.offset_mm
+                );
+            }
+            for e in &ins.extras {
+                println!("  extra {}", serde_json::to_string(e).unwrap_or_default());
+            }
+            for e in &r.truth.extras {
+                println!("  truth extra {:.1},{:.1}", e.x_px, e.y_px);
+            }
+            for e in &ins.ignored {
+                println!("  ignored {}", serde_json::to_string(e).unwrap_or_default());
+            }
+            for w in &ins.warnings {
+                println!("  note: {w}");
+            }
+        }
+    }
 }

@@ -20,6 +20,7 @@
 //! | [`measure`] | sub-pixel blob measurement (localisers, area) |
 //! | [`fit`] | robust similarity and line fits |
 //! | [`grid`] | lattice estimation and window placement |
+//! | [`scale`] | the scale from the pins' lattice when the recipe has no `mm_per_px` |
 //! | [`top`], [`side`] | the two views' pipelines |
 //! | [`result`] | plain serialisable results |
 //! | [`envelope`] | the promised imaging envelope (ranges) |
@@ -45,6 +46,7 @@ pub mod overlay;
 pub mod recipe;
 pub mod report;
 pub mod result;
+pub mod scale;
 pub mod side;
 pub mod synth;
 pub mod synth_envelope;

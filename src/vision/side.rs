@@ -585,6 +585,8 @@ pub fn inspect_side<P: Px>(
             height_mm: None,
             width_ratio: None,
             elongation: None,
+            contrast_ratio: None,
+            reason: None,
         };
         if let Some((i, b)) = best {
             used[i] = true;
@@ -605,6 +607,26 @@ pub fn inspect_side<P: Px>(
             } else {
                 PinStatus::Ok
             };
+            pr.reason = match pr.status {
+                PinStatus::Bent => Some(format!(
+                    "offset along the row {:.3} mm = {:.2} × position_mm {}",
+                    du.abs(),
+                    du.abs() / tol.position_mm,
+                    tol.position_mm
+                )),
+                PinStatus::Short | PinStatus::High => Some(format!(
+                    "height {h:.3} mm is {:.3} mm {} nominal {h_nom} = {:.2} × height_tol_mm {h_tol}",
+                    (h - h_nom).abs(),
+                    if h < h_nom { "below" } else { "above" },
+                    (h - h_nom).abs() / h_tol
+                )),
+                _ => None,
+            };
+        } else {
+            pr.reason = Some(format!(
+                "no pin standing within {:.1} px (0.4 pitch) of the position along the row",
+                0.4 * pitch_px
+            ));
         }
         pins.push(pr);
     }
@@ -616,12 +638,19 @@ pub fn inspect_side<P: Px>(
     let mut ignored = Vec::new();
     for (i, b) in bars.iter().enumerate() {
         if !used[i] {
+            let ar = b.width_px * b.height_px / tip_px;
             extras.push(ExtraResult {
                 x_px: b.tip.0,
                 y_px: b.tip.1,
-                area_ratio: b.width_px * b.height_px / tip_px,
+                area_ratio: ar,
                 distance_mm: None,
                 ignored_because: None,
+                contrast_ratio: None,
+                snr: None,
+                reason: Some(format!(
+                    "a pin-like bar ({:.2} mm high) that no grid position claims",
+                    b.height_px * mm_per_px
+                )),
             });
         }
     }
@@ -648,9 +677,19 @@ pub fn inspect_side<P: Px>(
             area_ratio: ar,
             distance_mm: None,
             ignored_because: None,
+            contrast_ratio: None,
+            snr: (m.noise > 0.0)
+                .then(|| ((m.hi - m.lo) as f64) * (m.mask_px as f64).sqrt() / m.noise as f64),
+            reason: None,
         };
         if ar >= rule.min_area_ratio {
-            extras.push(e);
+            extras.push(ExtraResult {
+                reason: Some(format!(
+                    "dust above the housing: area {ar:.2} of a tip ≥ {}",
+                    rule.min_area_ratio
+                )),
+                ..e
+            });
         } else if ar >= 0.5 * rule.min_area_ratio {
             ignored.push(ExtraResult {
                 ignored_because: Some(format!(
