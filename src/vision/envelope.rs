@@ -33,3 +33,9 @@ pub const JPEG_QUALITY_MIN: u8 = 50;
 /// Tip contrast (tip rim above the housing) of the nominal scene in 8-bit
 /// DN: [`CONTRAST`] is measured against it.
 pub const NOMINAL_TIP_CONTRAST_DN: f64 = 140.0;
+
+/// Smallest position (and side-view height) tolerance the envelope
+/// promises to judge, in pixels at the image's scale: a tolerance band of a
+/// pixel or two is below what a centre measured under the envelope's noise
+/// and blur can resolve (a gauge-capability limit, not an imaging one).
+pub const MIN_TOLERANCE_PX: f64 = 3.0;

@@ -99,6 +99,12 @@ pub struct BlobMeasure {
     /// Local noise σ (sample units): robust spread of the differences of
     /// neighbouring pixels in the ROI's border ring, / √2.
     pub noise: f32,
+    /// Σ (v − local level) over the coverage window: the blob's energy,
+    /// which blur only spreads (sample units × px²).
+    pub energy: f64,
+    /// Edge spread, px: √π Σ w(1 − w) / perimeter (≈ the blur σ; about
+    /// 0.3 for a sharp edge cut by the pixel grid).
+    pub edge_sigma: f64,
 }
 
 /// A monotone stand-in for the angle of (dx, dy) in [0, 4) ("diamond
@@ -393,12 +399,16 @@ pub fn measure_blob_with<P: Px>(
     };
     let (mut sw, mut swx, mut swy) = (0f64, 0f64, 0f64);
     let mut area = 0f64;
+    let (mut energy, mut edge) = (0f64, 0f64);
     for y in 0..rh {
         for x in 0..rw {
             let i = y * rw + x;
             if win[i] != 0 {
                 let wgt = weight(i, x, y);
                 area += wgt;
+                edge += wgt * (1.0 - wgt);
+                let val = if mask[i] != 0 { v[i] } else { veff[i] };
+                energy += (val - lo_s[sector_of(x, y)]).max(0.0) as f64;
                 if loc == Localiser::Coverage {
                     sw += wgt;
                     swx += wgt * x as f64;
@@ -445,5 +455,8 @@ pub fn measure_blob_with<P: Px>(
         mask_px: b.area as usize,
         touches_border,
         noise,
+        energy,
+        edge_sigma: std::f64::consts::PI.sqrt() * edge
+            / (2.0 * (std::f64::consts::PI * area.max(1.0)).sqrt()),
     })
 }

@@ -443,7 +443,7 @@ impl EnvelopeCase {
 
         // Pose and size: the part must fit, the scale stays in the envelope.
         let rotation_deg = rng.range(-env::ROTATION_DEG, env::ROTATION_DEG);
-        let max_height = height_mm + 4.0 * height_tol_mm;
+        let max_height = height_mm + 4.0 * height_tol_mm.max(env::MIN_TOLERANCE_PX * env::MM_PER_PX.1);
         let (hu, hv_up, hv_down) = part_extent(&recipe, &look, max_height);
         let (sn, cs) = rotation_deg.to_radians().sin_cos();
         let (sn, cs) = (sn.abs(), cs.abs());
@@ -512,6 +512,16 @@ impl EnvelopeCase {
                 }
             }
         };
+        // Tolerances a camera at this scale can resolve (the envelope's
+        // MIN_TOLERANCE_PX): a line sets them so.
+        let position_mm =
+            (position_mm.max(env::MIN_TOLERANCE_PX * mm_per_px) * 1000.0).ceil() / 1000.0;
+        recipe.tolerance.position_mm = position_mm;
+        let height_tol_mm =
+            (height_tol_mm.max(env::MIN_TOLERANCE_PX * mm_per_px) * 1000.0).ceil() / 1000.0;
+        if view == View::Side {
+            recipe.tolerance.height_tol_mm = Some(height_tol_mm);
+        }
         let scale_in_recipe = chance(&mut rng, 0.5);
         if scale_in_recipe {
             recipe.mm_per_px = Some(mm_per_px);

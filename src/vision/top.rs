@@ -151,6 +151,44 @@ fn find_housing(
     Some([a0, a1, b0, b1])
 }
 
+/// A tip's area ratio: its coverage area over the nominal tip, or (blur
+/// comparable to the tip) its energy over the median of the four nearest
+/// other tips' (`assigned`: the pin-like tips on grid positions).
+fn area_ratio_of(
+    cands: &[Candidate],
+    assigned: &[usize],
+    ci: usize,
+    tip_px: f64,
+    blurred: bool,
+) -> f64 {
+    let m = &cands[ci].m;
+    let abs = m.area_px / tip_px;
+    if !blurred {
+        return abs;
+    }
+    let mut d: Vec<(f64, f64)> = assigned
+        .iter()
+        .filter(|&&o| o != ci)
+        .map(|&o| {
+            let q = &cands[o].m;
+            ((q.x - m.x).hypot(q.y - m.y), q.energy)
+        })
+        .collect();
+    if d.len() < 2 {
+        return abs;
+    }
+    d.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut e: Vec<f64> = d.iter().take(4).map(|p| p.1).collect();
+    match grid::median(&mut e) {
+        Some(med) if med > 0.0 => m.energy / med,
+        _ => abs,
+    }
+}
+
+/// Blur (edge σ) beyond this fraction of the tip width: tip areas are
+/// judged against the neighbouring tips' energy.
+pub(crate) const BLUR_RELATIVE: f64 = 0.15;
+
 /// A blob counts as tip-bright when its level stands at least this
 /// fraction of the way from the local background to the local tip level.
 pub(crate) const MIN_TIP_CONTRAST: f64 = 0.5;
@@ -493,19 +531,38 @@ pub fn inspect_top<P: Px>(
         let (cx, cy) = bg_img.from_full(x, y);
         bg_img.bilinear(cx, cy)
     };
+    // Blur comparable to the tip leaves no plateau to take the tip level
+    // from, and the coverage area then grows with the blur: the tips'
+    // energy (which blur only spreads) is compared with the neighbouring
+    // tips' instead, and the note says so.
+    let pin_px = recipe.pin_mm * sim.s;
+    let assigned: Vec<usize> = pos_cand
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|&ci| cands[ci].pinlike)
+        .collect();
+    let mut sig: Vec<f64> = assigned.iter().map(|&ci| cands[ci].m.edge_sigma).collect();
+    let blur_sigma = grid::median(&mut sig).unwrap_or(0.0);
+    let blurred = assigned.len() >= 3 && blur_sigma > BLUR_RELATIVE * pin_px;
+    if blurred {
+        warnings.push(format!(
+            "tips blurred (edge σ ≈ {blur_sigma:.1} px on {pin_px:.1} px tips): tip areas judged by their energy against the neighbouring tips'"
+        ));
+    }
+    let area_of = |cands: &[Candidate], ci: usize| area_ratio_of(cands, &assigned, ci, tip_px, blurred);
     let refs: Vec<(f64, f64, f32, f32)> = pos_cand
         .iter()
         .flatten()
-        .map(|&ci| &cands[ci])
-        .filter(|c| {
-            let a = c.m.area_px / tip_px;
+        .map(|&ci| (ci, &cands[ci]))
+        .filter(|(ci, c)| {
+            let a = area_of(&cands, *ci);
             c.pinlike && a >= ta_lo && a <= ta_hi
         })
-        .map(|c| (c.m.x, c.m.y, c.m.hi, bg_at(c.m.x, c.m.y)))
+        .map(|(_, c)| (c.m.x, c.m.y, c.m.hi, bg_at(c.m.x, c.m.y)))
         .collect();
     let levels = LocalLevels { refs };
     let dilate = ((0.12 * pin_px0).round() as usize).max(2);
-    let pin_px = recipe.pin_mm * sim.s;
     // Second look at each empty position, with the locally expected
     // contrast: a dim tip the coarse threshold missed (a dark corner, low
     // gain) is found here; what is there otherwise is said in the reason.
@@ -573,7 +630,7 @@ pub fn inspect_top<P: Px>(
             let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);
             let (du, dv) = (du * mm_per_px, dv * mm_per_px);
             let off = du.hypot(dv);
-            let ar = m.area_px / tip_px;
+            let ar = area_of(&cands, ci);
             pr.x_px = Some(m.x);
             pr.y_px = Some(m.y);
             pr.dx_mm = Some(du);
