@@ -83,6 +83,8 @@ pub struct CoarseBlob {
 pub struct CoarseSearch {
     pub coarse: Coarse,
     pub tophat: Vec<f32>,
+    /// See [`Found::background`].
+    pub background: Vec<f32>,
     /// Typical tip contrast on the top-hat (median blob peak).
     pub tip_contrast: f32,
     pub threshold: f32,
@@ -100,9 +102,54 @@ pub fn coarse_search<P: Px>(
 ) -> CoarseSearch {
     let k = coarse_factor(pin_px);
     let coarse = Coarse::build(plane, k, sign);
+    let f = search_coarse(&coarse, pin_px, mask);
+    CoarseSearch {
+        coarse,
+        tophat: f.tophat,
+        background: f.background,
+        tip_contrast: f.tip_contrast,
+        threshold: f.threshold,
+        blobs: f.blobs,
+    }
+}
+
+/// What [`search_coarse`] finds on a coarse image.
+#[derive(Debug, Clone)]
+pub struct Found {
+    pub tophat: Vec<f32>,
+    /// Local background (coarse, `sign` space): the housing's and the
+    /// fixture's level with tips removed and holes filled.
+    pub background: Vec<f32>,
+    pub tip_contrast: f32,
+    pub threshold: f32,
+    pub blobs: Vec<CoarseBlob>,
+}
+
+/// The search on a prebuilt coarse image (of any factor; `pin_px` is in
+/// full-resolution pixels).
+pub fn search_coarse(
+    coarse: &Coarse,
+    pin_px: f64,
+    mask: Option<&dyn Fn(usize, usize) -> bool>,
+) -> Found {
+    let k = coarse.k;
     let pin_c = pin_px / k as f64;
     let r = (1.1 * pin_c).ceil() as usize + 1;
-    let tophat = morph::white_top_hat(&coarse.data, coarse.w, coarse.h, r);
+    // Smoothing over about half a tip (a matched filter's better half):
+    // noise falls by the box's width, a tip's (or a quarter-tip debris')
+    // peak does not.
+    let m = (pin_c / 4.0).floor() as usize;
+    let smooth = if m >= 1 {
+        std::borrow::Cow::Owned(morph::box_mean(&coarse.data, coarse.w, coarse.h, m))
+    } else {
+        std::borrow::Cow::Borrowed(&coarse.data)
+    };
+    let background = morph::background_square(&smooth, coarse.w, coarse.h, r);
+    let tophat: Vec<f32> = smooth
+        .iter()
+        .zip(&background)
+        .map(|(a, b)| (a - b).max(0.0))
+        .collect();
     let (w, h) = (coarse.w, coarse.h);
     let tip_area_c = pin_c * pin_c;
     let inside = |x: usize, y: usize| mask.is_none_or(|m| m(x, y));
@@ -153,9 +200,9 @@ pub fn coarse_search<P: Px>(
             blob: b.clone(),
         })
         .collect();
-    CoarseSearch {
-        coarse,
+    Found {
         tophat,
+        background,
         tip_contrast,
         threshold,
         blobs,

@@ -96,6 +96,15 @@ pub struct BlobMeasure {
     pub mask_px: usize,
     /// True when the mask reaches the ROI border (the blob may be cut).
     pub touches_border: bool,
+    /// Local noise σ (sample units): robust spread of the differences of
+    /// neighbouring pixels in the ROI's border ring, / √2.
+    pub noise: f32,
+    /// Σ (v − local level) over the coverage window: the blob's energy,
+    /// which blur only spreads (sample units × px²).
+    pub energy: f64,
+    /// Edge spread, px: √π Σ w(1 − w) / perimeter (≈ the blur σ; about
+    /// 0.3 for a sharp edge cut by the pixel grid).
+    pub edge_sigma: f64,
 }
 
 /// A monotone stand-in for the angle of (dx, dy) in [0, 4) ("diamond
@@ -137,6 +146,22 @@ pub fn measure_blob<P: Px>(
     loc: Localiser,
     dilate: usize,
 ) -> Option<BlobMeasure> {
+    measure_blob_with(plane, sign, roi, seed, loc, dilate, None)
+}
+
+/// [`measure_blob`] with a floor under the full-coverage level: a blob
+/// fainter than `hi_floor` (the level a tip has at that place) is measured
+/// as the area a tip-bright blob of the same energy would have, so a faint
+/// stain does not count as a large extra.
+pub fn measure_blob_with<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    roi: Roi,
+    seed: (f64, f64),
+    loc: Localiser,
+    dilate: usize,
+    hi_floor: Option<f32>,
+) -> Option<BlobMeasure> {
     let (rw, rh) = (roi.w(), roi.h());
     if rw < 3 || rh < 3 {
         return None;
@@ -158,6 +183,19 @@ pub fn measure_blob<P: Px>(
         }
     }
     let lo0 = percentile(&mut ring, 0.5);
+    // Local noise: neighbouring-pixel differences along the border ring.
+    let mut diffs: Vec<f32> = Vec::with_capacity(2 * (rw + rh));
+    for y in [0, 1, rh - 2, rh - 1] {
+        for x in 1..rw {
+            diffs.push((v[y * rw + x] - v[y * rw + x - 1]).abs());
+        }
+    }
+    for x in [0, 1, rw - 2, rw - 1] {
+        for y in 2..rh - 2 {
+            diffs.push((v[y * rw + x] - v[(y - 1) * rw + x]).abs());
+        }
+    }
+    let noise = percentile(&mut diffs, 0.5) * 1.4826 / std::f32::consts::SQRT_2;
     let mut all = v.clone();
     let peak = percentile(&mut all, 0.995);
     if !(peak > lo0) {
@@ -326,6 +364,7 @@ pub fn measure_blob<P: Px>(
     } else {
         hi
     };
+    let hi_cov = hi_floor.map_or(hi, |f| hi.max(f));
     const SECTORS: usize = 16;
     let sector_of = |x: usize, y: usize| -> usize {
         let d = diamond_angle((y as f64 - b.cy) as f32, (x as f64 - b.cx) as f32);
@@ -352,20 +391,24 @@ pub fn measure_blob<P: Px>(
         .collect();
     let lo = lo0;
     let weight = |i: usize, x: usize, y: usize| -> f64 {
-        if mask[i] != 0 && v[i] >= hi {
+        if mask[i] != 0 && v[i] >= hi_cov {
             return 1.0;
         }
         let l = lo_s[sector_of(x, y)];
-        ((veff[i] - l) / (hi - l).max(1e-6)).clamp(0.0, 1.0) as f64
+        ((veff[i] - l) / (hi_cov - l).max(1e-6)).clamp(0.0, 1.0) as f64
     };
     let (mut sw, mut swx, mut swy) = (0f64, 0f64, 0f64);
     let mut area = 0f64;
+    let (mut energy, mut edge) = (0f64, 0f64);
     for y in 0..rh {
         for x in 0..rw {
             let i = y * rw + x;
             if win[i] != 0 {
                 let wgt = weight(i, x, y);
                 area += wgt;
+                edge += wgt * (1.0 - wgt);
+                let val = if mask[i] != 0 { v[i] } else { veff[i] };
+                energy += (val - lo_s[sector_of(x, y)]).max(0.0) as f64;
                 if loc == Localiser::Coverage {
                     sw += wgt;
                     swx += wgt * x as f64;
@@ -411,5 +454,9 @@ pub fn measure_blob<P: Px>(
         elongation,
         mask_px: b.area as usize,
         touches_border,
+        noise,
+        energy,
+        edge_sigma: std::f64::consts::PI.sqrt() * edge
+            / (2.0 * (std::f64::consts::PI * area.max(1.0)).sqrt()),
     })
 }

@@ -20,8 +20,11 @@
 //! | [`measure`] | sub-pixel blob measurement (localisers, area) |
 //! | [`fit`] | robust similarity and line fits |
 //! | [`grid`] | lattice estimation and window placement |
+//! | [`scale`] | the scale from the pins' lattice when the recipe has no `mm_per_px` |
 //! | [`top`], [`side`] | the two views' pipelines |
 //! | [`result`] | plain serialisable results |
+//! | [`envelope`] | the promised imaging envelope (ranges) |
+//! | [`synth`], [`synth_envelope`] | synthetic images with exact truth: fixed scenes, and random draws over the whole envelope |
 
 // Comparisons are written `!(a > b)` on purpose throughout: they are true
 // for NaN too, so a degenerate measurement takes the safe branch.
@@ -29,6 +32,7 @@
 
 pub mod batch;
 pub mod detect;
+pub mod envelope;
 pub mod error;
 pub mod fit;
 pub mod gray;
@@ -42,8 +46,10 @@ pub mod overlay;
 pub mod recipe;
 pub mod report;
 pub mod result;
+pub mod scale;
 pub mod side;
 pub mod synth;
+pub mod synth_envelope;
 pub mod top;
 pub mod truth;
 

@@ -136,6 +136,66 @@ pub fn open_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
     b
 }
 
+/// Mean over a (2 m + 1)² square (edges: the mean of the part inside),
+/// separable running sums, O(1) per pixel.
+pub fn box_mean(data: &[f32], w: usize, h: usize, m: usize) -> Vec<f32> {
+    if m == 0 || w == 0 || h == 0 {
+        return data.to_vec();
+    }
+    let run = |src: &[f32], dst: &mut [f32], n: usize, stride: usize, count: usize, step: usize| {
+        // `count` lines of `n` samples; sample i of line l at l*step + i*stride.
+        for l in 0..count {
+            let base = l * step;
+            let mut acc = 0f64;
+            let mut lo = 0usize;
+            let mut hi = 0usize; // window [lo, hi)
+            for i in 0..n {
+                let want_hi = (i + m + 1).min(n);
+                while hi < want_hi {
+                    acc += src[base + hi * stride] as f64;
+                    hi += 1;
+                }
+                let want_lo = i.saturating_sub(m);
+                while lo < want_lo {
+                    acc -= src[base + lo * stride] as f64;
+                    lo += 1;
+                }
+                dst[base + i * stride] = (acc / (hi - lo) as f64) as f32;
+            }
+        }
+    };
+    let mut a = vec![0f32; data.len()];
+    run(data, &mut a, w, 1, h, w);
+    let mut b = vec![0f32; data.len()];
+    run(&a, &mut b, h, w, w, 1);
+    b
+}
+
+/// Local background: the closing (radius `r`) of the opening (radius `r`).
+/// The opening removes bright structures narrower than the window (tips,
+/// debris); the closing then fills the dark ones it leaves or that were
+/// there (clearance holes, an empty hole's moat, the bright-lit holes of a
+/// back-lit part seen in the inverted polarity), so the result follows the
+/// housing and the fixture, not the holes around each tip.
+pub fn background_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
+    let mut b = open_square(data, w, h, r);
+    pass_vertical::<true>(&mut b, w, h, r);
+    let mut t = transpose(&b, w, h);
+    pass_vertical::<true>(&mut t, h, w, r);
+    pass_vertical::<false>(&mut t, h, w, r);
+    let mut c = transpose(&t, h, w);
+    pass_vertical::<false>(&mut c, w, h, r);
+    c
+}
+
+/// Height above the local background ([`background_square`]), clamped at
+/// zero: a tip's contrast against the housing around it, whatever the
+/// level of its clearance hole.
+pub fn background_top_hat(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
+    let b = background_square(data, w, h, r);
+    data.iter().zip(b).map(|(a, b)| (a - b).max(0.0)).collect()
+}
+
 /// White top-hat: image minus its opening (bright structures narrower than
 /// the window, on whatever background).
 pub fn white_top_hat(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
@@ -147,6 +207,44 @@ pub fn white_top_hat(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn box_mean_matches_a_direct_sum_and_background_ignores_holes() {
+        let (w, h) = (7, 5);
+        let d: Vec<f32> = (0..w * h).map(|i| ((i * 37) % 11) as f32).collect();
+        let b = box_mean(&d, w, h, 1);
+        for y in 0..h {
+            for x in 0..w {
+                let (mut s, mut n) = (0.0, 0.0);
+                for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+                    for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                        s += d[yy * w + xx];
+                        n += 1.0;
+                    }
+                }
+                assert!((b[y * w + x] - s / n).abs() < 1e-4);
+            }
+        }
+        // A bright tip in a dark hole on a mid-grey housing: the background
+        // is the housing's level everywhere, the tip stands 50 above it.
+        let (w, h) = (40, 40);
+        let mut d = vec![100f32; w * h];
+        for y in 14..26 {
+            for x in 14..26 {
+                d[y * w + x] = 20.0;
+            }
+        }
+        for y in 17..23 {
+            for x in 17..23 {
+                d[y * w + x] = 150.0;
+            }
+        }
+        let bg = background_square(&d, w, h, 8);
+        assert!(bg.iter().all(|&v| (v - 100.0).abs() < 1e-4));
+        let th = background_top_hat(&d, w, h, 8);
+        assert_eq!(th[20 * w + 20], 50.0);
+        assert_eq!(th[15 * w + 15], 0.0);
+    }
 
     fn naive(input: &[f32], r: usize, max: bool) -> Vec<f32> {
         (0..input.len())

@@ -77,6 +77,15 @@ pub struct PinResult {
     /// Shape: sqrt of the ratio of the principal second moments (1 = square
     /// or disc, larger = elongated); top view.
     pub elongation: Option<f64>,
+    /// Top view: the tip's level above the local background as a fraction
+    /// of the tip level expected there from the neighbouring pins (≈ 1 for
+    /// a tip; for a missing pin, what its expected position shows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contrast_ratio: Option<f64>,
+    /// Why the pin is not `ok`, with the numbers against the limit (e.g.
+    /// "offset 0.132 mm = 1.32 × position_mm 0.100").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
 }
 
 /// Something detected that belongs to no grid position.
@@ -92,6 +101,17 @@ pub struct ExtraResult {
     /// Why a blob was not counted (only in `ignored`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ignored_because: Option<String>,
+    /// Top view: level above the local background / the tip level
+    /// expected there (debris as bright as a tip: ≈ 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contrast_ratio: Option<f64>,
+    /// Contrast × √(pixels) / local noise σ: how far above the local noise
+    /// floor the blob stands.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub snr: Option<f64>,
+    /// Why an extra counts, with the numbers against the rule.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
 }
 
 /// The fitted nominal grid.

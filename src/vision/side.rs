@@ -36,6 +36,94 @@ struct Bar {
     height_px: f64,
 }
 
+/// Divides a back-lit coarse image (`sign` space: the backlight is the
+/// low level) by its backlight: a cubic surface fitted to the brightest
+/// decile of each cell of a 12 × 12 grid, with cells darker than the fit
+/// (the housing, pins) weighed down until they stop pulling it. The
+/// result is −(image / backlight) × 1000: the backlight at −1000
+/// everywhere, silhouettes above it.
+fn normalise_backlight(c: &mut Coarse) {
+    let (w, h) = (c.w, c.h);
+    if w < 8 || h < 8 {
+        return;
+    }
+    let n = 12usize;
+    let mut cells: Vec<(f64, f64, f64)> = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (x0, x1) = (i * w / n, ((i + 1) * w / n).max(i * w / n + 1));
+            let (y0, y1) = (j * h / n, ((j + 1) * h / n).max(j * h / n + 1));
+            let mut v: Vec<f32> = Vec::with_capacity((x1 - x0) * (y1 - y0));
+            for y in y0..y1.min(h) {
+                for x in x0..x1.min(w) {
+                    v.push(-c.data[y * w + x]);
+                }
+            }
+            if v.is_empty() {
+                continue;
+            }
+            let q = (v.len() - 1) * 9 / 10;
+            let (_, val, _) = v.select_nth_unstable_by(q, |a, b| a.total_cmp(b));
+            let u = 2.0 * (0.5 * (x0 + x1) as f64) / w as f64 - 1.0;
+            let t = 2.0 * (0.5 * (y0 + y1) as f64) / h as f64 - 1.0;
+            cells.push((u, t, *val as f64));
+        }
+    }
+    let basis = |u: f64, t: f64| -> [f64; 10] {
+        [
+            1.0,
+            u,
+            t,
+            u * u,
+            u * t,
+            t * t,
+            u * u * u,
+            u * u * t,
+            u * t * t,
+            t * t * t,
+        ]
+    };
+    let mut wts = vec![1.0f64; cells.len()];
+    let mut coef = nalgebra::SVector::<f64, 10>::zeros();
+    for _ in 0..10 {
+        let mut ata = nalgebra::SMatrix::<f64, 10, 10>::zeros();
+        let mut atb = nalgebra::SVector::<f64, 10>::zeros();
+        for (cell, &wt) in cells.iter().zip(&wts) {
+            let b = nalgebra::SVector::<f64, 10>::from(basis(cell.0, cell.1));
+            ata += wt * b * b.transpose();
+            atb += wt * cell.2 * b;
+        }
+        for d in 0..10 {
+            ata[(d, d)] += 1e-9;
+        }
+        let Some(sol) = ata.lu().solve(&atb) else {
+            return;
+        };
+        coef = sol;
+        for (cell, wt) in cells.iter().zip(wts.iter_mut()) {
+            let f = coef.dot(&nalgebra::SVector::<f64, 10>::from(basis(cell.0, cell.1)));
+            // Darker than the backlight by more than 8 %: a silhouette.
+            *wt = if cell.2 >= 0.92 * f { 1.0 } else { 1e-3 };
+        }
+    }
+    let mut peak = 0f64;
+    for (cell, _) in cells.iter().zip(&wts) {
+        peak = peak.max(cell.2);
+    }
+    let floor = (0.05 * peak).max(1e-6);
+    for y in 0..h {
+        let t = 2.0 * (y as f64 + 0.5) / h as f64 - 1.0;
+        for x in 0..w {
+            let u = 2.0 * (x as f64 + 0.5) / w as f64 - 1.0;
+            let b = coef
+                .dot(&nalgebra::SVector::<f64, 10>::from(basis(u, t)))
+                .max(floor);
+            let i = y * w + x;
+            c.data[i] = (c.data[i] as f64 / b * 1000.0) as f32;
+        }
+    }
+}
+
 /// Half-level crossing in a profile: first index pair (from the start)
 /// where the profile passes `level` going up; returns the fractional index.
 fn first_rise(prof: &[f32], level: f32) -> Option<f64> {
@@ -228,17 +316,23 @@ pub fn inspect_side<P: Px>(
         Polarity::Dark => -1.0,
         Polarity::Bright => 1.0,
     };
-    let pin_px_prior = recipe
-        .mm_per_px
-        .map(|m| recipe.pin_mm / m)
-        .unwrap_or((plane.w.max(plane.h) as f64) / 45.0);
-    let k = detect::coarse_factor(pin_px_prior);
-    let coarse = Coarse::build(plane, k, sign);
+    // Without `mm_per_px` nothing says how wide a pin is until the bars
+    // are found: a fine coarse factor (2) then, and the width measured from
+    // the bars below (never a guess from the image's size).
+    let mut pin_px_prior = recipe.mm_per_px.map(|m| recipe.pin_mm / m);
+    let k = pin_px_prior.map_or(2, detect::coarse_factor);
+    let mut coarse = Coarse::build(plane, k, sign);
     check_contrast(&coarse, full_scale)?;
-    let (cw, ch) = (coarse.w, coarse.h);
-    let t = detect::otsu(&coarse.data, cw, ch);
+    // The full-resolution steps below are compared with the raw range.
     let (r_lo, r_hi) = detect::robust_range(&coarse.data);
     let contrast = r_hi - r_lo;
+    if sign < 0.0 {
+        // Back-lit silhouette: divide by the backlight, so vignetting and
+        // gradients leave the backlight at one level everywhere.
+        normalise_backlight(&mut coarse);
+    }
+    let (cw, ch) = (coarse.w, coarse.h);
+    let t = detect::otsu(&coarse.data, cw, ch);
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
     // 1. Housing edge, coarse: top of the longest silhouette run per column.
@@ -305,9 +399,26 @@ pub fn inspect_side<P: Px>(
     });
     let mut bar_blobs = Vec::new();
     let mut dust_blobs = Vec::new();
+    let touches_edge =
+        |b: &label::Blob| (b.x_min..=b.x_max).any(|x| b.y_max as f64 >= edge_c(x as f64) - 3.5);
+    let pin_px_prior = match pin_px_prior.take() {
+        Some(p) => p,
+        None => {
+            // Median width of the bars standing on the edge (at least
+            // twice as high as wide), in full-resolution pixels.
+            let mut w: Vec<f64> = lab
+                .blobs
+                .iter()
+                .filter(|b| touches_edge(b) && b.height() >= 2 * b.width())
+                .map(|b| (b.area as f64 / b.height() as f64) * k as f64)
+                .collect();
+            grid::median(&mut w).unwrap_or(8.0).max(3.0)
+        }
+    };
     for b in &lab.blobs {
-        let touches = (b.x_min..=b.x_max).any(|x| b.y_max as f64 >= edge_c(x as f64) - 3.5);
-        if touches && (b.height() as f64) >= 2.0 * (b.width() as f64).min(pin_px_prior / k as f64) {
+        if touches_edge(b)
+            && (b.height() as f64) >= 2.0 * (b.width() as f64).min(pin_px_prior / k as f64)
+        {
             bar_blobs.push(b.clone());
         } else {
             dust_blobs.push(b.clone());
@@ -585,6 +696,8 @@ pub fn inspect_side<P: Px>(
             height_mm: None,
             width_ratio: None,
             elongation: None,
+            contrast_ratio: None,
+            reason: None,
         };
         if let Some((i, b)) = best {
             used[i] = true;
@@ -605,6 +718,26 @@ pub fn inspect_side<P: Px>(
             } else {
                 PinStatus::Ok
             };
+            pr.reason = match pr.status {
+                PinStatus::Bent => Some(format!(
+                    "offset along the row {:.3} mm = {:.2} × position_mm {}",
+                    du.abs(),
+                    du.abs() / tol.position_mm,
+                    tol.position_mm
+                )),
+                PinStatus::Short | PinStatus::High => Some(format!(
+                    "height {h:.3} mm is {:.3} mm {} nominal {h_nom} = {:.2} × height_tol_mm {h_tol}",
+                    (h - h_nom).abs(),
+                    if h < h_nom { "below" } else { "above" },
+                    (h - h_nom).abs() / h_tol
+                )),
+                _ => None,
+            };
+        } else {
+            pr.reason = Some(format!(
+                "no pin standing within {:.1} px (0.4 pitch) of the position along the row",
+                0.4 * pitch_px
+            ));
         }
         pins.push(pr);
     }
@@ -616,12 +749,19 @@ pub fn inspect_side<P: Px>(
     let mut ignored = Vec::new();
     for (i, b) in bars.iter().enumerate() {
         if !used[i] {
+            let ar = b.width_px * b.height_px / tip_px;
             extras.push(ExtraResult {
                 x_px: b.tip.0,
                 y_px: b.tip.1,
-                area_ratio: b.width_px * b.height_px / tip_px,
+                area_ratio: ar,
                 distance_mm: None,
                 ignored_because: None,
+                contrast_ratio: None,
+                snr: None,
+                reason: Some(format!(
+                    "a pin-like bar ({:.2} mm high) that no grid position claims",
+                    b.height_px * mm_per_px
+                )),
             });
         }
     }
@@ -648,9 +788,19 @@ pub fn inspect_side<P: Px>(
             area_ratio: ar,
             distance_mm: None,
             ignored_because: None,
+            contrast_ratio: None,
+            snr: (m.noise > 0.0)
+                .then(|| ((m.hi - m.lo) as f64) * (m.mask_px as f64).sqrt() / m.noise as f64),
+            reason: None,
         };
         if ar >= rule.min_area_ratio {
-            extras.push(e);
+            extras.push(ExtraResult {
+                reason: Some(format!(
+                    "dust above the housing: area {ar:.2} of a tip ≥ {}",
+                    rule.min_area_ratio
+                )),
+                ..e
+            });
         } else if ar >= 0.5 * rule.min_area_ratio {
             ignored.push(ExtraResult {
                 ignored_because: Some(format!(

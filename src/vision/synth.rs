@@ -69,6 +69,12 @@ impl Shape {
         }
     }
 
+    /// Signed distance to the boundary (px; negative inside): exact
+    /// inside, a lower bound outside (see [`Shape::coverage`]).
+    pub fn signed_distance(&self, p: (f64, f64)) -> f64 {
+        self.sd(p)
+    }
+
     fn inside(&self, p: (f64, f64)) -> bool {
         self.sd(p) < 0.0
     }

@@ -14,7 +14,7 @@ use super::fit::{self, Similarity};
 use super::gray::{Coarse, ImageInfo, Plane, Px};
 use super::grid::{self, Lattice, LatticeError};
 use super::measure::{self, BlobMeasure, Roi};
-use super::recipe::{PinShape, Polarity, Recipe};
+use super::recipe::{Polarity, Recipe};
 use super::result::*;
 
 /// A measured blob and what it looks like.
@@ -22,6 +22,9 @@ use super::result::*;
 pub(crate) struct Candidate {
     pub m: BlobMeasure,
     pub pinlike: bool,
+    /// Where it was measured (for a second look with other levels).
+    pub roi: Roi,
+    pub seed: (f64, f64),
 }
 
 /// Minimum contrast (fraction of full scale) below which an image is blank.
@@ -39,56 +42,6 @@ pub(crate) fn check_contrast(coarse: &Coarse, full_scale: f32) -> Result<(), Vis
     Ok(())
 }
 
-/// Equivalent width of a tip of area `a` px².
-fn width_from_area(a: f64, shape: PinShape) -> f64 {
-    match shape {
-        PinShape::Square => a.sqrt(),
-        PinShape::Round => (4.0 * a / std::f64::consts::PI).sqrt(),
-    }
-}
-
-/// Without `mm_per_px`: the tip width in pixels, from the most common blob
-/// size on a top-hat with a window of 1/6 of the image.
-fn estimate_pin_px<P: Px>(
-    plane: &Plane<P>,
-    sign: f32,
-    recipe: &Recipe,
-    full_scale: f32,
-) -> Result<f64, VisionError> {
-    let k = (plane.w.max(plane.h) / 400).clamp(1, 6);
-    let coarse = Coarse::build(plane, k, sign);
-    check_contrast(&coarse, full_scale)?;
-    let r = coarse.w.max(coarse.h) / 12;
-    let th = super::morph::white_top_hat(&coarse.data, coarse.w, coarse.h, r);
-    let t = detect::otsu(&th, coarse.w, coarse.h);
-    let lab = super::label::label(coarse.w, coarse.h, |x, y| th[y * coarse.w + x] > t);
-    let mut areas: Vec<f64> = lab
-        .blobs
-        .iter()
-        .filter(|b| {
-            b.area >= 4 && (b.width().max(b.height()) as f64) < 3.0 * (b.area as f64).sqrt() + 2.0
-        })
-        .map(|b| b.area as f64)
-        .collect();
-    if areas.is_empty() {
-        return Err(VisionError::NoPins {
-            part: recipe.part_number.clone(),
-            msg: "no tip-sized blobs to estimate the scale from (mm_per_px absent)".into(),
-        });
-    }
-    areas.sort_by(|a, b| a.total_cmp(b));
-    let n = recipe.positions().len().min(areas.len()).max(1);
-    let mut best = (f64::INFINITY, 0usize);
-    for i in 0..=(areas.len() - n) {
-        let ratio = areas[i + n - 1] / areas[i];
-        if ratio < best.0 {
-            best = (ratio, i);
-        }
-    }
-    let med = areas[best.1 + n / 2];
-    Ok(width_from_area(med, recipe.pin_shape) * k as f64)
-}
-
 /// Full-resolution measurement of every coarse blob.
 fn measure_candidates<P: Px>(
     plane: &Plane<P>,
@@ -96,11 +49,11 @@ fn measure_candidates<P: Px>(
     cs: &CoarseSearch,
     pin_px: f64,
     opts: &InspectOptions,
-) -> Vec<BlobMeasure> {
+) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
     let k = cs.coarse.k as f64;
     let margin = (0.45 * pin_px).max(4.0);
     let dilate = ((0.12 * pin_px).round() as usize).max(2);
-    let mut out: Vec<BlobMeasure> = Vec::with_capacity(cs.blobs.len());
+    let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(cs.blobs.len());
     for cb in &cs.blobs {
         let b = &cb.blob;
         let roi = Roi::around(
@@ -114,16 +67,16 @@ fn measure_candidates<P: Px>(
         );
         let seed = cs.coarse.to_full(b.cx, b.cy);
         if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate) {
-            out.push(m);
+            out.push((m, roi, seed));
         }
     }
     // Two coarse blobs can resolve to one blob at full resolution.
-    out.sort_by(|a, b| b.area_px.total_cmp(&a.area_px));
-    let mut kept: Vec<BlobMeasure> = Vec::with_capacity(out.len());
+    out.sort_by(|a, b| b.0.area_px.total_cmp(&a.0.area_px));
+    let mut kept: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(out.len());
     for m in out {
         if kept
             .iter()
-            .all(|q| (q.x - m.x).hypot(q.y - m.y) > 0.3 * pin_px)
+            .all(|q| (q.0.x - m.0.x).hypot(q.0.y - m.0.y) > 0.3 * pin_px)
         {
             kept.push(m);
         }
@@ -198,6 +151,93 @@ fn find_housing(
     Some([a0, a1, b0, b1])
 }
 
+/// A tip's area ratio: its coverage area over the nominal tip, or (blur
+/// comparable to the tip) its energy over the median of the four nearest
+/// other tips' (`assigned`: the pin-like tips on grid positions).
+fn area_ratio_of(
+    cands: &[Candidate],
+    assigned: &[usize],
+    ci: usize,
+    tip_px: f64,
+    blurred: bool,
+) -> f64 {
+    let m = &cands[ci].m;
+    let abs = m.area_px / tip_px;
+    if !blurred {
+        return abs;
+    }
+    let mut d: Vec<(f64, f64)> = assigned
+        .iter()
+        .filter(|&&o| o != ci)
+        .map(|&o| {
+            let q = &cands[o].m;
+            ((q.x - m.x).hypot(q.y - m.y), q.energy)
+        })
+        .collect();
+    if d.len() < 2 {
+        return abs;
+    }
+    d.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut e: Vec<f64> = d.iter().take(4).map(|p| p.1).collect();
+    match grid::median(&mut e) {
+        Some(med) if med > 0.0 => m.energy / med,
+        _ => abs,
+    }
+}
+
+/// Blur (edge σ) beyond this fraction of the tip width: tip areas are
+/// judged against the neighbouring tips' energy.
+pub(crate) const BLUR_RELATIVE: f64 = 0.15;
+
+/// A blob counts as tip-bright when its level stands at least this
+/// fraction of the way from the local background to the local tip level.
+pub(crate) const MIN_TIP_CONTRAST: f64 = 0.5;
+/// ... and its contrast, summed over its pixels, at least this many local
+/// noise σ.
+pub(crate) const MIN_SNR: f64 = 5.0;
+
+/// Tip level and background level expected at a place, from the nearest
+/// intact tips.
+struct LocalLevels {
+    /// (x, y, tip level, background level) per intact tip, `sign` space.
+    refs: Vec<(f64, f64, f32, f32)>,
+}
+
+impl LocalLevels {
+    /// Medians over the four nearest intact tips.
+    fn expected(&self, x: f64, y: f64) -> Option<(f32, f32)> {
+        if self.refs.is_empty() {
+            return None;
+        }
+        let mut d: Vec<(f64, usize)> = self
+            .refs
+            .iter()
+            .enumerate()
+            .map(|(i, r)| ((r.0 - x).hypot(r.1 - y), i))
+            .collect();
+        let k = d.len().min(4);
+        d.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+        let mut t: Vec<f64> = d[..k].iter().map(|p| self.refs[p.1].2 as f64).collect();
+        let mut b: Vec<f64> = d[..k].iter().map(|p| self.refs[p.1].3 as f64).collect();
+        Some((grid::median(&mut t)? as f32, grid::median(&mut b)? as f32))
+    }
+}
+
+/// Level `hi` as a fraction of the way from background `b` to tip level `t`.
+fn contrast_ratio(hi: f32, t: f32, b: f32) -> f64 {
+    ((hi - b) / (t - b).max(1e-6)) as f64
+}
+
+/// A blob's contrast summed over its mask against the local noise.
+fn snr_of(m: &BlobMeasure) -> f64 {
+    let c = (m.hi - m.lo).max(0.0) as f64;
+    if m.noise > 0.0 {
+        c * (m.mask_px as f64).sqrt() / m.noise as f64
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Distance of (u, v) from the rectangle [u0, u1] × [v0, v1] (0 inside).
 pub(crate) fn rect_distance(u: f64, v: f64, r: [f64; 4]) -> f64 {
     let du = (r[0] - u).max(u - r[1]).max(0.0);
@@ -219,21 +259,29 @@ pub fn inspect_top<P: Px>(
     };
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
-    let pin_px0 = match recipe.mm_per_px {
-        Some(m) => recipe.pin_mm / m,
-        None => estimate_pin_px(plane, sign, recipe, full_scale)?,
+    let (pin_px0, _estimate) = match recipe.mm_per_px {
+        Some(m) => (recipe.pin_mm / m, None),
+        None => {
+            let e = super::scale::estimate(plane, sign, recipe, full_scale)?;
+            (e.pin_px, Some(e))
+        }
     };
     let s0 = pin_px0 / recipe.pin_mm;
     let cs = detect::coarse_search(plane, sign, pin_px0, None);
     check_contrast(&cs.coarse, full_scale)?;
     let blobs = measure_candidates(plane, sign, &cs, pin_px0, opts);
     let tip_px0 = recipe.tip_area_mm2() * s0 * s0;
-    let cands: Vec<Candidate> = blobs
+    let mut cands: Vec<Candidate> = blobs
         .into_iter()
-        .map(|m| {
+        .map(|(m, roi, seed)| {
             let a = m.area_px / tip_px0;
             let pinlike = (0.3..3.0).contains(&a) && m.elongation < 3.0 && !m.touches_border;
-            Candidate { m, pinlike }
+            Candidate {
+                m,
+                pinlike,
+                roi,
+                seed,
+            }
         })
         .collect();
     let pin_pts: Vec<(f64, f64)> = cands
@@ -252,7 +300,7 @@ pub fn inspect_top<P: Px>(
         });
     }
     let (px_mm, py_mm) = (recipe.pitch_mm[0], recipe.pitch_mm[1]);
-    let pitch_px = recipe.mm_per_px.map(|_| (px_mm * s0, py_mm * s0));
+    let pitch_px = Some((px_mm * s0, py_mm * s0));
     let lat = match grid::estimate_lattice(
         &pin_pts,
         pitch_px,
@@ -469,6 +517,92 @@ pub fn inspect_top<P: Px>(
             cand_used[ci] = true;
         }
     }
+    // Local levels: every intact tip found tells the tip level and the
+    // background level (housing) at its place; vignetting and gradients
+    // change both slowly, so the nearest tips say what a tip must look like
+    // anywhere on the part.
+    let bg_img = Coarse {
+        w: cs.coarse.w,
+        h: cs.coarse.h,
+        k: cs.coarse.k,
+        data: cs.background.clone(),
+    };
+    let bg_at = |x: f64, y: f64| {
+        let (cx, cy) = bg_img.from_full(x, y);
+        bg_img.bilinear(cx, cy)
+    };
+    // Blur comparable to the tip leaves no plateau to take the tip level
+    // from, and the coverage area then grows with the blur: the tips'
+    // energy (which blur only spreads) is compared with the neighbouring
+    // tips' instead, and the note says so.
+    let pin_px = recipe.pin_mm * sim.s;
+    let assigned: Vec<usize> = pos_cand
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|&ci| cands[ci].pinlike)
+        .collect();
+    let mut sig: Vec<f64> = assigned.iter().map(|&ci| cands[ci].m.edge_sigma).collect();
+    let blur_sigma = grid::median(&mut sig).unwrap_or(0.0);
+    let blurred = assigned.len() >= 3 && blur_sigma > BLUR_RELATIVE * pin_px;
+    if blurred {
+        warnings.push(format!(
+            "tips blurred (edge σ ≈ {blur_sigma:.1} px on {pin_px:.1} px tips): tip areas judged by their energy against the neighbouring tips'"
+        ));
+    }
+    let area_of = |cands: &[Candidate], ci: usize| area_ratio_of(cands, &assigned, ci, tip_px, blurred);
+    let refs: Vec<(f64, f64, f32, f32)> = pos_cand
+        .iter()
+        .flatten()
+        .map(|&ci| (ci, &cands[ci]))
+        .filter(|(ci, c)| {
+            let a = area_of(&cands, *ci);
+            c.pinlike && a >= ta_lo && a <= ta_hi
+        })
+        .map(|(_, c)| (c.m.x, c.m.y, c.m.hi, bg_at(c.m.x, c.m.y)))
+        .collect();
+    let levels = LocalLevels { refs };
+    let dilate = ((0.12 * pin_px0).round() as usize).max(2);
+    // Second look at each empty position, with the locally expected
+    // contrast: a dim tip the coarse threshold missed (a dark corner, low
+    // gain) is found here; what is there otherwise is said in the reason.
+    let mut empty_look: Vec<Option<(f64, f64)>> = vec![None; positions.len()];
+    for pi in 0..positions.len() {
+        if pos_cand[pi].is_some() {
+            continue;
+        }
+        let (nx, ny) = nominal[pi];
+        let Some((t_exp, b_exp)) = levels.expected(nx, ny) else {
+            continue;
+        };
+        let half = (0.9 * pin_px + 2.0).min(0.5 * min_pitch_px);
+        let roi = Roi::around(nx, ny, nx, ny, half, plane.w, plane.h);
+        let Some(m) = measure::measure_blob(plane, sign, roi, (nx, ny), opts.localiser, dilate)
+        else {
+            continue;
+        };
+        let rho = contrast_ratio(m.hi, t_exp, b_exp);
+        let snr = snr_of(&m);
+        let d = (m.x - nx).hypot(m.y - ny);
+        empty_look[pi] = Some((rho, snr));
+        if rho >= MIN_TIP_CONTRAST
+            && snr >= MIN_SNR
+            && d < r_assign
+            && !m.touches_border
+            && m.area_px / tip_px >= 0.15
+        {
+            let pinlike = m.elongation < 3.0;
+            cands.push(Candidate {
+                m,
+                pinlike,
+                roi,
+                seed: (nx, ny),
+            });
+            cand_used.push(true);
+            pos_cand[pi] = Some(cands.len() - 1);
+        }
+    }
+
     let tol = &recipe.tolerance;
     let mut pins = Vec::with_capacity(positions.len());
     for (pi, &(row, col)) in positions.iter().enumerate() {
@@ -488,13 +622,15 @@ pub fn inspect_top<P: Px>(
             height_mm: None,
             width_ratio: None,
             elongation: None,
+            contrast_ratio: None,
+            reason: None,
         };
         if let Some(ci) = pos_cand[pi] {
             let m = &cands[ci].m;
             let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);
             let (du, dv) = (du * mm_per_px, dv * mm_per_px);
             let off = du.hypot(dv);
-            let ar = m.area_px / tip_px;
+            let ar = area_of(&cands, ci);
             pr.x_px = Some(m.x);
             pr.y_px = Some(m.y);
             pr.dx_mm = Some(du);
@@ -502,13 +638,34 @@ pub fn inspect_top<P: Px>(
             pr.offset_mm = Some(off);
             pr.area_ratio = Some(ar);
             pr.elongation = Some(m.elongation);
+            pr.contrast_ratio = levels
+                .expected(m.x, m.y)
+                .map(|(t, b)| contrast_ratio(m.hi, t, b));
             pr.status = if ar < ta_lo || ar > ta_hi {
+                pr.reason = Some(format!(
+                    "tip area {ar:.2} × nominal, outside tip_area [{ta_lo}, {ta_hi}]"
+                ));
                 PinStatus::Damaged
             } else if off > tol.position_mm {
+                pr.reason = Some(format!(
+                    "offset {off:.3} mm = {:.2} × position_mm {} (dx {du:+.3}, dy {dv:+.3} mm)",
+                    off / tol.position_mm,
+                    tol.position_mm
+                ));
                 PinStatus::Bent
             } else {
                 PinStatus::Ok
             };
+        } else {
+            pr.reason = Some(match empty_look[pi] {
+                Some((rho, snr)) => {
+                    pr.contrast_ratio = Some(rho);
+                    format!(
+                        "no tip within {r_assign:.1} px of the position: there the level reaches {rho:.2} of the local tip level ({snr:.1} σ above the noise; a tip needs ≥ {MIN_TIP_CONTRAST} and ≥ {MIN_SNR} σ)"
+                    )
+                }
+                None => format!("no tip within {r_assign:.1} px of the position"),
+            });
         }
         pins.push(pr);
     }
@@ -549,35 +706,90 @@ pub fn inspect_top<P: Px>(
     let rule = &recipe.extras;
     let mut extras = Vec::new();
     let mut ignored = Vec::new();
+    let max_dist = rule.max_distance_pitch * px_mm;
     for (ci, c) in cands.iter().enumerate() {
         if cand_used[ci] {
             continue;
         }
-        let ar = c.m.area_px / tip_px;
-        let (u, v) = sim.inverse(c.m.x, c.m.y);
+        let ar0 = c.m.area_px / tip_px;
+        if ar0 < 0.5 * rule.min_area_ratio {
+            continue;
+        }
+        // The blob against what a tip looks like here: its area counted in
+        // tip-bright units (a faint stain weighs little), its level as a
+        // fraction of the local tip level, its contrast against the local
+        // noise floor.
+        let expected = levels.expected(c.m.x, c.m.y);
+        let (m, rho) = match expected {
+            Some((t, b)) => {
+                let m = measure::measure_blob_with(
+                    plane,
+                    sign,
+                    c.roi,
+                    c.seed,
+                    opts.localiser,
+                    dilate,
+                    Some(t),
+                )
+                .unwrap_or_else(|| c.m.clone());
+                (m, Some(contrast_ratio(c.m.hi, t, b)))
+            }
+            None => (c.m.clone(), None),
+        };
+        let ar = m.area_px / tip_px;
+        let snr = snr_of(&c.m);
+        let (u, v) = sim.inverse(m.x, m.y);
         let dist = rect_distance(u, v, rect);
         let mut e = ExtraResult {
-            x_px: c.m.x,
-            y_px: c.m.y,
+            x_px: m.x,
+            y_px: m.y,
             area_ratio: ar,
             distance_mm: Some(dist),
             ignored_because: None,
+            contrast_ratio: rho,
+            snr: Some(snr),
+            reason: None,
         };
+        let rho_v = rho.unwrap_or(1.0);
         if ar < rule.min_area_ratio {
             if ar >= 0.5 * rule.min_area_ratio {
                 e.ignored_because = Some(format!(
-                    "area {:.2} of a tip, below {}",
-                    ar, rule.min_area_ratio
+                    "area {ar:.2} of a tip (in tip-bright units), below {}",
+                    rule.min_area_ratio
                 ));
                 ignored.push(e);
             }
-        } else if dist > rule.max_distance_pitch * px_mm {
+        } else if c.m.touches_border {
+            if ar0 >= rule.min_area_ratio {
+                e.ignored_because = Some(
+                    "part of a larger structure (it runs past its measuring window): a housing edge or frame, not a separate blob".into(),
+                );
+                ignored.push(e);
+            }
+        } else if rho_v < MIN_TIP_CONTRAST {
+            if ar0 >= rule.min_area_ratio {
+                e.ignored_because = Some(format!(
+                    "its level reaches {rho_v:.2} of the local tip level, below {MIN_TIP_CONTRAST}: housing or fixture structure, not a tip-bright blob"
+                ));
+                ignored.push(e);
+            }
+        } else if snr < MIN_SNR {
+            e.ignored_because = Some(format!(
+                "{snr:.1} σ above the local noise floor, below {MIN_SNR}"
+            ));
+            ignored.push(e);
+        } else if dist > max_dist {
             e.ignored_because = Some(format!(
                 "{dist:.2} mm from the housing, beyond {} pitch",
                 rule.max_distance_pitch
             ));
             ignored.push(e);
         } else {
+            e.reason = Some(format!(
+                "area {ar:.2} of a tip ≥ {}, level {} of the local tip level, {snr:.0} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2})",
+                rule.min_area_ratio,
+                rho.map_or("n/a".to_string(), |r| format!("{r:.2}")),
+            ));
             extras.push(e);
         }
     }
