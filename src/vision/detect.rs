@@ -219,3 +219,21 @@ fn blob_peak(lab: &label::Labelling, b: &Blob, values: &[f32], w: usize) -> f32 
     }
     p
 }
+
+/// Minimum contrast (fraction of full scale) below which an image is blank.
+pub(crate) const MIN_CONTRAST: f32 = 0.012;
+
+pub(crate) fn check_contrast(
+    coarse: &super::gray::Coarse,
+    full_scale: f32,
+) -> Result<(), super::error::VisionError> {
+    let (lo, hi) = robust_range(&coarse.data);
+    let (a, b) = (lo.abs().min(hi.abs()), lo.abs().max(hi.abs()));
+    if !(hi - lo >= MIN_CONTRAST * full_scale) {
+        return Err(super::error::VisionError::NoContrast {
+            lo: a.round(),
+            hi: b.round(),
+        });
+    }
+    Ok(())
+}

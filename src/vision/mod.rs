@@ -30,6 +30,7 @@
 // for NaN too, so a degenerate measurement takes the safe branch.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod backlight;
 pub mod batch;
 pub mod detect;
 pub mod envelope;
@@ -50,6 +51,7 @@ pub mod scale;
 pub mod side;
 pub mod synth;
 pub mod synth_envelope;
+pub mod tip_levels;
 pub mod top;
 pub mod truth;
 

@@ -170,7 +170,7 @@ pub fn estimate<P: Px>(
             break;
         };
         if !contrast_checked {
-            super::top::check_contrast(coarse, full_scale)?;
+            detect::check_contrast(coarse, full_scale)?;
             contrast_checked = true;
         }
         let c = score_candidate(recipe, coarse, w);

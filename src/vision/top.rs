@@ -16,31 +16,10 @@ use super::grid::{self, Lattice, LatticeError};
 use super::measure::{self, BlobMeasure, Roi};
 use super::recipe::{Polarity, Recipe};
 use super::result::*;
-
-/// A measured blob and what it looks like.
-#[derive(Debug, Clone)]
-pub(crate) struct Candidate {
-    pub m: BlobMeasure,
-    pub pinlike: bool,
-    /// Where it was measured (for a second look with other levels).
-    pub roi: Roi,
-    pub seed: (f64, f64),
-}
-
-/// Minimum contrast (fraction of full scale) below which an image is blank.
-pub(crate) const MIN_CONTRAST: f32 = 0.012;
-
-pub(crate) fn check_contrast(coarse: &Coarse, full_scale: f32) -> Result<(), VisionError> {
-    let (lo, hi) = detect::robust_range(&coarse.data);
-    let (a, b) = (lo.abs().min(hi.abs()), lo.abs().max(hi.abs()));
-    if !(hi - lo >= MIN_CONTRAST * full_scale) {
-        return Err(VisionError::NoContrast {
-            lo: a.round(),
-            hi: b.round(),
-        });
-    }
-    Ok(())
-}
+use super::tip_levels::{
+    BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of,
+    contrast_ratio, snr_of,
+};
 
 /// Full-resolution measurement of every coarse blob.
 fn measure_candidates<P: Px>(
@@ -151,93 +130,6 @@ fn find_housing(
     Some([a0, a1, b0, b1])
 }
 
-/// A tip's area ratio: its coverage area over the nominal tip, or (blur
-/// comparable to the tip) its energy over the median of the four nearest
-/// other tips' (`assigned`: the pin-like tips on grid positions).
-fn area_ratio_of(
-    cands: &[Candidate],
-    assigned: &[usize],
-    ci: usize,
-    tip_px: f64,
-    blurred: bool,
-) -> f64 {
-    let m = &cands[ci].m;
-    let abs = m.area_px / tip_px;
-    if !blurred {
-        return abs;
-    }
-    let mut d: Vec<(f64, f64)> = assigned
-        .iter()
-        .filter(|&&o| o != ci)
-        .map(|&o| {
-            let q = &cands[o].m;
-            ((q.x - m.x).hypot(q.y - m.y), q.energy)
-        })
-        .collect();
-    if d.len() < 2 {
-        return abs;
-    }
-    d.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut e: Vec<f64> = d.iter().take(4).map(|p| p.1).collect();
-    match grid::median(&mut e) {
-        Some(med) if med > 0.0 => m.energy / med,
-        _ => abs,
-    }
-}
-
-/// Blur (edge σ) beyond this fraction of the tip width: tip areas are
-/// judged against the neighbouring tips' energy.
-pub(crate) const BLUR_RELATIVE: f64 = 0.15;
-
-/// A blob counts as tip-bright when its level stands at least this
-/// fraction of the way from the local background to the local tip level.
-pub(crate) const MIN_TIP_CONTRAST: f64 = 0.5;
-/// ... and its contrast, summed over its pixels, at least this many local
-/// noise σ.
-pub(crate) const MIN_SNR: f64 = 5.0;
-
-/// Tip level and background level expected at a place, from the nearest
-/// intact tips.
-struct LocalLevels {
-    /// (x, y, tip level, background level) per intact tip, `sign` space.
-    refs: Vec<(f64, f64, f32, f32)>,
-}
-
-impl LocalLevels {
-    /// Medians over the four nearest intact tips.
-    fn expected(&self, x: f64, y: f64) -> Option<(f32, f32)> {
-        if self.refs.is_empty() {
-            return None;
-        }
-        let mut d: Vec<(f64, usize)> = self
-            .refs
-            .iter()
-            .enumerate()
-            .map(|(i, r)| ((r.0 - x).hypot(r.1 - y), i))
-            .collect();
-        let k = d.len().min(4);
-        d.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
-        let mut t: Vec<f64> = d[..k].iter().map(|p| self.refs[p.1].2 as f64).collect();
-        let mut b: Vec<f64> = d[..k].iter().map(|p| self.refs[p.1].3 as f64).collect();
-        Some((grid::median(&mut t)? as f32, grid::median(&mut b)? as f32))
-    }
-}
-
-/// Level `hi` as a fraction of the way from background `b` to tip level `t`.
-fn contrast_ratio(hi: f32, t: f32, b: f32) -> f64 {
-    ((hi - b) / (t - b).max(1e-6)) as f64
-}
-
-/// A blob's contrast summed over its mask against the local noise.
-fn snr_of(m: &BlobMeasure) -> f64 {
-    let c = (m.hi - m.lo).max(0.0) as f64;
-    if m.noise > 0.0 {
-        c * (m.mask_px as f64).sqrt() / m.noise as f64
-    } else {
-        f64::INFINITY
-    }
-}
-
 /// Distance of (u, v) from the rectangle [u0, u1] × [v0, v1] (0 inside).
 pub(crate) fn rect_distance(u: f64, v: f64, r: [f64; 4]) -> f64 {
     let du = (r[0] - u).max(u - r[1]).max(0.0);
@@ -268,7 +160,7 @@ pub fn inspect_top<P: Px>(
     };
     let s0 = pin_px0 / recipe.pin_mm;
     let cs = detect::coarse_search(plane, sign, pin_px0, None);
-    check_contrast(&cs.coarse, full_scale)?;
+    detect::check_contrast(&cs.coarse, full_scale)?;
     let blobs = measure_candidates(plane, sign, &cs, pin_px0, opts);
     let tip_px0 = recipe.tip_area_mm2() * s0 * s0;
     let mut cands: Vec<Candidate> = blobs
@@ -550,7 +442,8 @@ pub fn inspect_top<P: Px>(
             "tips blurred (edge σ ≈ {blur_sigma:.1} px on {pin_px:.1} px tips): tip areas judged by their energy against the neighbouring tips'"
         ));
     }
-    let area_of = |cands: &[Candidate], ci: usize| area_ratio_of(cands, &assigned, ci, tip_px, blurred);
+    let area_of =
+        |cands: &[Candidate], ci: usize| area_ratio_of(cands, &assigned, ci, tip_px, blurred);
     let refs: Vec<(f64, f64, f32, f32)> = pos_cand
         .iter()
         .flatten()

@@ -1,0 +1,112 @@
+//! The envelope generator's own checks.
+
+use super::*;
+
+#[test]
+fn draws_stay_inside_the_envelope_and_parts_fit() {
+    for seed in 0..300 {
+        let c = EnvelopeCase::draw(seed);
+        let f = &c.factors;
+        assert!(
+            c.recipe.validate().is_ok(),
+            "{seed}: {:?}",
+            c.recipe.validate()
+        );
+        assert!(
+            f.mm_per_px >= env::MM_PER_PX.0 - 1e-12 && f.mm_per_px <= env::MM_PER_PX.1 + 1e-12,
+            "{seed}: {}",
+            f.mm_per_px
+        );
+        assert!(f.width as u64 * f.height as u64 <= env::MAX_PIXELS);
+        assert!(f.width.min(f.height) >= 240 && f.width.max(f.height) >= 320);
+        assert!(f.rotation_deg.abs() <= env::ROTATION_DEG);
+        assert!((env::CONTRAST.0..=env::CONTRAST.1).contains(&f.contrast));
+        assert!((env::GAIN.0..=env::GAIN.1).contains(&f.gain));
+        // Every node of the grid inside the frame.
+        let sim = c.sim();
+        for p in &c.pins {
+            let (u, v) = c.pin_uv(p);
+            let (x, y) = sim.apply(u, v);
+            assert!(
+                x > 0.0 && y > 0.0 && x < f.width as f64 && y < f.height as f64,
+                "{seed}"
+            );
+        }
+    }
+}
+
+#[test]
+fn rendered_truth_agrees_with_the_image() {
+    // Clean, sharp top-view cases with large tips: each intact tip's
+    // intensity centroid (hole level subtracted) over the pixels well
+    // inside its clearance hole is its truth centre.
+    let mut checked = 0;
+    for seed in 0..200 {
+        let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Top));
+        if c.factors.tip_px < 12.0 {
+            continue;
+        }
+        c.factors.noise_dn = 0.0;
+        c.factors.blur_px = 0.0;
+        c.factors.vignetting = 0.0;
+        c.factors.gradient = 0.0;
+        c.factors.gain = 1.0;
+        c.factors.jpeg_quality = None;
+        c.factors.colour = false;
+        c.factors.bits = 16;
+        c.factors.edge_ramp_px = 0.6;
+        c.look.shading = 0.0;
+        c.look.hole_f = 1.4;
+        for p in &mut c.pins {
+            p.damage = Damage::None;
+            p.present = true;
+            p.offset_mm = (0.0, 0.0);
+        }
+        c.extras.clear();
+        let r = c.render().unwrap();
+        assert_eq!(r.truth.verdict, Verdict::Pass);
+        let m = c.factors.mm_per_px;
+        let sim = c.sim();
+        let hole_half = 0.5 * c.look.hole_f * c.recipe.pin_mm - 0.7 * m;
+        let hole_l = c.contrast_level(c.look.levels.hole) as f64 * 65535.0 / 255.0;
+        let sign = if c.recipe.polarity == Polarity::Dark {
+            -1.0
+        } else {
+            1.0
+        };
+        for t in &r.truth.pins {
+            let (tx, ty) = (t.x_px.unwrap(), t.y_px.unwrap());
+            let (nu, nv) = c.recipe.nominal_uv_mm(t.row, t.col);
+            let reach = (hole_half / m).ceil() as i64 + 2;
+            let (mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0);
+            for y in (ty.round() as i64 - reach)..=(ty.round() as i64 + reach) {
+                for x in (tx.round() as i64 - reach)..=(tx.round() as i64 + reach) {
+                    let (u, v) = sim.inverse(x as f64, y as f64);
+                    let (du, dv) = (u - nu, v - nv);
+                    let inside = match c.recipe.pin_shape {
+                        PinShape::Round => du.hypot(dv) < hole_half,
+                        PinShape::Square => du.abs() < hole_half && dv.abs() < hole_half,
+                    };
+                    if !inside {
+                        continue;
+                    }
+                    let v = sign * (r.gray.get(x as u32, y as u32) as f64 - hole_l);
+                    sw += v;
+                    sx += v * x as f64;
+                    sy += v * y as f64;
+                }
+            }
+            assert!(
+                (sx / sw - tx).abs() < 0.02 && (sy / sw - ty).abs() < 0.02,
+                "seed {seed} {t:?}: {} {}",
+                sx / sw,
+                sy / sw
+            );
+        }
+        checked += 1;
+        if checked == 4 {
+            break;
+        }
+    }
+    assert_eq!(checked, 4);
+}
