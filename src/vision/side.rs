@@ -25,6 +25,7 @@ use super::label;
 use super::measure::{self, Localiser, Roi};
 use super::recipe::{Polarity, Recipe};
 use super::result::*;
+use super::tip_levels;
 
 /// A bar (pin candidate) measured at full resolution.
 #[derive(Debug, Clone)]
@@ -213,6 +214,10 @@ fn robust_offset_scale(
     ))
 }
 
+/// Least contrast of a dust shadow, as a fraction of the silhouette's
+/// (backlight to housing): dust is opaque, noise clumps are not.
+const DUST_MIN_CONTRAST: f64 = 0.4;
+
 /// Inspects one side-view image.
 pub fn inspect_side<P: Px>(
     recipe: &Recipe,
@@ -383,9 +388,21 @@ pub fn inspect_side<P: Px>(
     for b in &bar_blobs {
         let x0f = b.x_min as f64 * kf;
         let x1f = (b.x_max as f64 + 1.0) * kf - 1.0;
-        let margin = (0.5 * pin_px_prior).max(4.0);
-        let xa = (x0f - margin).max(0.0) as usize;
-        let xb = ((x1f + margin) as usize).min(plane.w - 1);
+        // Room on each side for the blurred edge and the background beside
+        // it (`bar_edges` wants 5+ px of background), but never past the
+        // middle of the gap to the next bar.
+        let margin = (0.5 * pin_px_prior).max(9.0);
+        let (mut gap_l, mut gap_r) = (f64::NEG_INFINITY, f64::INFINITY);
+        for o in &bar_blobs {
+            let (o0, o1) = (o.x_min as f64 * kf, (o.x_max as f64 + 1.0) * kf - 1.0);
+            if o1 < x0f {
+                gap_l = gap_l.max(0.5 * (o1 + x0f));
+            } else if o0 > x1f {
+                gap_r = gap_r.min(0.5 * (o0 + x1f));
+            }
+        }
+        let xa = (x0f - margin).max(gap_l).max(0.0) as usize;
+        let xb = ((x1f + margin).min(gap_r) as usize).min(plane.w - 1);
         let tip_guess = b.y_min as f64 * kf;
         let xm = 0.5 * (x0f + x1f);
         let base = line.y_at(xm);
@@ -695,18 +712,36 @@ pub fn inspect_side<P: Px>(
             continue;
         };
         let ar = m.area_px / tip_px;
+        // Dust is opaque: its shadow stands most of the way from the
+        // backlight to the housing's level, and clear of the noise. A
+        // clump of noise in a dim, noisy backlight does neither.
+        let c_ratio = ((m.hi - m.lo) / contrast.max(1e-6)) as f64;
+        let snr = if m.noise > 0.0 {
+            ((m.hi - m.lo) as f64) * (m.mask_px as f64).sqrt() / m.noise as f64
+        } else {
+            f64::INFINITY
+        };
         let e = ExtraResult {
             x_px: m.x,
             y_px: m.y,
             area_ratio: ar,
             distance_mm: None,
             ignored_because: None,
-            contrast_ratio: None,
-            snr: (m.noise > 0.0)
-                .then(|| ((m.hi - m.lo) as f64) * (m.mask_px as f64).sqrt() / m.noise as f64),
+            contrast_ratio: Some(c_ratio),
+            snr: snr.is_finite().then_some(snr),
             reason: None,
         };
-        if ar >= rule.min_area_ratio {
+        if c_ratio < DUST_MIN_CONTRAST || snr < tip_levels::MIN_SNR {
+            if ar >= rule.min_area_ratio {
+                ignored.push(ExtraResult {
+                    ignored_because: Some(format!(
+                        "faint: contrast {c_ratio:.2} of the silhouette's (needs {DUST_MIN_CONTRAST}), SNR {snr:.1} (needs {})",
+                        tip_levels::MIN_SNR
+                    )),
+                    ..e
+                });
+            }
+        } else if ar >= rule.min_area_ratio {
             extras.push(ExtraResult {
                 reason: Some(format!(
                     "dust above the housing: area {ar:.2} of a tip ≥ {}",
