@@ -636,7 +636,13 @@ fn vision(f: &mut Frame, area: Rect, v: &VisionView, theme: &Theme, img: &mut Im
     if let Some(m) = &v.message {
         lines.push(Line::styled(m.clone(), theme.warn()));
     }
-    let info_h = (lines.len() as u16 + 2).min(side.height / 2).max(3);
+    // Rows the lines take once wrapped (a long note wraps onto several).
+    let inner_w = side.width.saturating_sub(2).max(1) as usize;
+    let rows: usize = lines
+        .iter()
+        .map(|l| l.width().div_ceil(inner_w).max(1))
+        .sum();
+    let info_h = (rows as u16 + 2).min(side.height / 2).max(3);
     let [info, table_area] =
         Layout::vertical([Constraint::Length(info_h), Constraint::Min(3)]).areas(side);
     let p = Paragraph::new(lines)

@@ -39,3 +39,91 @@ pub const NOMINAL_TIP_CONTRAST_DN: f64 = 140.0;
 /// pixel or two is below what a centre measured under the envelope's noise
 /// and blur can resolve (a gauge-capability limit, not an imaging one).
 pub const MIN_TOLERANCE_PX: f64 = 3.0;
+
+/// Notes for an inspection made outside the envelope: what lies outside,
+/// by how much, and the promised range, so a verdict is never silently a
+/// guess. Checked: scale, image size, tilt and the tolerance bands in
+/// pixels (all measured exactly by the inspection). Not yet checked:
+/// contrast, noise, blur, vignetting (docs/vision.md).
+pub fn notes(ins: &super::Inspection) -> Vec<String> {
+    let mut out = Vec::new();
+    let outside = "outside the promised envelope";
+    let m = ins.grid.mm_per_px;
+    if m.is_finite() && !(MM_PER_PX.0..=MM_PER_PX.1).contains(&m) {
+        out.push(format!(
+            "scale {m:.4} mm/px {outside} ({}–{} mm/px)",
+            MM_PER_PX.0, MM_PER_PX.1
+        ));
+    }
+    let (w, h) = (ins.image.width, ins.image.height);
+    let (long, short) = (w.max(h), w.min(h));
+    if long < MIN_SIDES.0 || short < MIN_SIDES.1 {
+        out.push(format!(
+            "image {w} × {h} smaller than the promised envelope ({} × {} at least)",
+            MIN_SIDES.0, MIN_SIDES.1
+        ));
+    }
+    if w as u64 * h as u64 > MAX_PIXELS {
+        out.push(format!(
+            "image {w} × {h} larger than the promised envelope ({:.0} MP at most)",
+            MAX_PIXELS as f64 / 1e6
+        ));
+    }
+    let tilt = ins.grid.rotation_deg;
+    if tilt.abs() > ROTATION_DEG {
+        out.push(format!(
+            "part tilted {tilt:.1}° {outside} (±{ROTATION_DEG}°)"
+        ));
+    }
+    if m.is_finite() && m > 0.0 {
+        let t = &ins.tolerance;
+        let bands = [
+            ("position", Some(t.position_mm)),
+            ("height", t.height_tol_mm),
+        ];
+        for (name, mm) in bands {
+            if let Some(mm) = mm.filter(|v| v.is_finite()) {
+                let px = mm / m;
+                if px < MIN_TOLERANCE_PX {
+                    out.push(format!(
+                        "{name} tolerance {mm} mm is {px:.1} px at this scale, below the {MIN_TOLERANCE_PX} px the envelope promises to judge (pins near the limit may be misjudged)"
+                    ));
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vision::{self, InspectOptions, synth_envelope::EnvelopeCase};
+
+    #[test]
+    fn an_inspection_inside_the_envelope_has_no_note_and_a_shrunk_one_does() {
+        let case = EnvelopeCase::draw(3);
+        let r = case.render().unwrap();
+        let ins = vision::inspect_gray(
+            &case.recipe,
+            &r.gray,
+            r.info.clone(),
+            &InspectOptions::default(),
+        )
+        .unwrap();
+        assert!(notes(&ins).is_empty(), "{:?}", notes(&ins));
+        let mut out = ins.clone();
+        out.grid.mm_per_px = 0.2;
+        out.grid.rotation_deg = -7.5;
+        out.image.width = 200;
+        out.tolerance.position_mm = 0.3;
+        let n = notes(&out);
+        assert_eq!(n.len(), 4, "{n:?}");
+        assert!(
+            n[0].contains("scale 0.2000 mm/px outside the promised envelope (0.008–0.05 mm/px)")
+        );
+        assert!(n[1].contains("smaller than the promised envelope"));
+        assert!(n[2].contains("tilted -7.5°"));
+        assert!(n[3].contains("position tolerance 0.3 mm is 1.5 px"));
+    }
+}

@@ -108,10 +108,12 @@ fn dispatch<P: gray::Px>(
     full_scale: f32,
     opts: &InspectOptions,
 ) -> Result<Inspection, VisionError> {
-    match recipe.view {
+    let mut ins = match recipe.view {
         View::Top => top::inspect_top(recipe, p, info, full_scale, opts),
         View::Side => side::inspect_side(recipe, p, info, full_scale, opts),
-    }
+    }?;
+    ins.warnings.extend(envelope::notes(&ins));
+    Ok(ins)
 }
 
 /// Decodes and inspects an image held in memory.

@@ -1,0 +1,108 @@
+//! Verdict accuracy over the randomised imaging envelope
+//! (`vision::synth_envelope`): every factor drawn at once, exact truth,
+//! a look unlike our own `synth::Scene`. Seeds 200 000 … 200 239 are
+//! held out: the pipeline was tuned on 0 … 999 (`examples/eval_envelope`).
+//!
+//! The floors below are a **ratchet at the level measured when this test
+//! was written** (2026-11-24: 87.9 % verdicts, 97.61 % pin statuses, 8
+//! errors, median 0.084 px on these 240), not issue 12's targets (≥ 99.5 % verdicts,
+//! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
+//! per factor and where the remaining wrong verdicts sit. A change that
+//! lowers them fails; a change that raises them should raise the floors.
+
+use pinsight::vision::synth_envelope::EnvelopeCase;
+use pinsight::vision::{self, InspectOptions, PinStatus, View, truth};
+use rayon::prelude::*;
+
+struct Outcome {
+    view: View,
+    error: bool,
+    verdict_ok: bool,
+    pins: usize,
+    pins_wrong: usize,
+    ok_errors: Vec<f64>,
+}
+
+fn run(seed: u64) -> Outcome {
+    let case = EnvelopeCase::draw(seed);
+    let r = case.render().expect("the generator renders every draw");
+    let mut o = Outcome {
+        view: case.factors.view,
+        error: false,
+        verdict_ok: false,
+        pins: r.truth.pins.len(),
+        pins_wrong: 0,
+        ok_errors: Vec::new(),
+    };
+    match vision::inspect_gray(
+        &case.recipe,
+        &r.gray,
+        r.info.clone(),
+        &InspectOptions::default(),
+    ) {
+        Err(_) => {
+            o.error = true;
+            o.pins_wrong = o.pins;
+        }
+        Ok(ins) => {
+            let c = truth::compare(&ins, &r.truth, 0.5 * case.factors.tip_px.max(8.0) + 6.0);
+            o.verdict_ok = c.verdict_ok;
+            o.pins_wrong = c.status_mismatches.len();
+            o.ok_errors = c
+                .centre_errors
+                .iter()
+                .filter(|e| e.2 == PinStatus::Ok)
+                .map(|e| e.3.hypot(e.4))
+                .collect();
+        }
+    }
+    o
+}
+
+fn pct(a: usize, b: usize) -> f64 {
+    100.0 * a as f64 / b.max(1) as f64
+}
+
+#[test]
+fn verdicts_hold_over_the_randomised_envelope() {
+    let seeds = 200_000u64..200_240;
+    let out: Vec<Outcome> = seeds.into_par_iter().map(run).collect();
+    let n = out.len();
+    let right = out.iter().filter(|o| o.verdict_ok).count();
+    let errors = out.iter().filter(|o| o.error).count();
+    let pins: usize = out.iter().map(|o| o.pins).sum();
+    let pins_wrong: usize = out.iter().map(|o| o.pins_wrong).sum();
+    let mut ok: Vec<f64> = out.iter().flat_map(|o| o.ok_errors.clone()).collect();
+    ok.sort_by(|a, b| a.total_cmp(b));
+    let median = ok[ok.len() / 2];
+    let per_view = |v: View| {
+        let s: Vec<&Outcome> = out.iter().filter(|o| o.view == v).collect();
+        (s.iter().filter(|o| o.verdict_ok).count(), s.len())
+    };
+    let (top, side) = (per_view(View::Top), per_view(View::Side));
+    eprintln!(
+        "{n} images: verdicts right {right} ({:.1} %), errors {errors}, pin statuses right {:.2} %, \
+         ok-pin centre error median {median:.3} px; top {:.1} % of {}, side {:.1} % of {}",
+        pct(right, n),
+        pct(pins - pins_wrong, pins),
+        pct(top.0, top.1),
+        top.1,
+        pct(side.0, side.1),
+        side.1
+    );
+    assert!(
+        pct(right, n) >= 87.5,
+        "connector verdicts right: {:.1} %",
+        pct(right, n)
+    );
+    assert!(
+        pct(pins - pins_wrong, pins) >= 97.5,
+        "pin statuses right: {:.2} %",
+        pct(pins - pins_wrong, pins)
+    );
+    assert!(
+        errors <= 8,
+        "{errors} images inside the envelope ended as errors"
+    );
+    assert!(median <= 0.09, "ok-pin centre error median {median:.3} px");
+}
