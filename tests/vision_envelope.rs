@@ -4,8 +4,8 @@
 //! held out: the pipeline was tuned on 0 … 999 (`examples/eval_envelope`).
 //!
 //! The floors below are a **ratchet at the level measured when this test
-//! was written** (2026-11-24: 87.9 % verdicts, 97.61 % pin statuses, 8
-//! errors, median 0.084 px on these 240), not issue 12's targets (≥ 99.5 % verdicts,
+//! was written** (2026-11-24: 89.6 % verdicts, 97.77 % pin statuses, 8
+//! errors, median 0.081 px on these 240), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -91,7 +91,7 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 87.5,
+        pct(right, n) >= 89.5,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );
@@ -104,5 +104,5 @@ fn verdicts_hold_over_the_randomised_envelope() {
         errors <= 8,
         "{errors} images inside the envelope ended as errors"
     );
-    assert!(median <= 0.09, "ok-pin centre error median {median:.3} px");
+    assert!(median <= 0.085, "ok-pin centre error median {median:.3} px");
 }

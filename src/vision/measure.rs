@@ -153,6 +153,14 @@ pub fn measure_blob<P: Px>(
 /// fainter than `hi_floor` (the level a tip has at that place) is measured
 /// as the area a tip-bright blob of the same energy would have, so a faint
 /// stain does not count as a large extra.
+/// Where, from the local background (0) to the tip's rim level (1), the
+/// coverage that locates a tip's centre starts (see `measure_blob_with`).
+pub const CENTRE_LEVEL: f32 = 0.5;
+/// Edge spread (px, `BlobMeasure::edge_sigma`) below which a tip's centre
+/// is the full-range coverage centroid, and above which it is the
+/// upper-part one; blended linearly between.
+pub const CENTRE_BLUR: (f64, f64) = (0.6, 1.5);
+
 pub fn measure_blob_with<P: Px>(
     plane: &Plane<P>,
     sign: f32,
@@ -397,7 +405,22 @@ pub fn measure_blob_with<P: Px>(
         let l = lo_s[sector_of(x, y)];
         ((veff[i] - l) / (hi_cov - l).max(1e-6)).clamp(0.0, 1.0) as f64
     };
+    // The centre is taken from the upper part of the edge (coverage from
+    // CENTRE_LEVEL of the way up): under blur, the housing beside a tip
+    // that sits off-centre in its clearance hole spills light onto the
+    // near edge's foot and pulls a full-range coverage centroid outward;
+    // the upper part of a symmetric tip's edge is symmetric still and
+    // sees less of that spill.
+    let centre_weight = |i: usize, x: usize, y: usize| -> f64 {
+        if mask[i] != 0 && v[i] >= hi_cov {
+            return 1.0;
+        }
+        let l = lo_s[sector_of(x, y)];
+        let l = l + CENTRE_LEVEL * (hi_cov - l);
+        ((veff[i] - l) / (hi_cov - l).max(1e-6)).clamp(0.0, 1.0) as f64
+    };
     let (mut sw, mut swx, mut swy) = (0f64, 0f64, 0f64);
+    let (mut hw, mut hwx, mut hwy) = (0f64, 0f64, 0f64);
     let mut area = 0f64;
     let (mut energy, mut edge) = (0f64, 0f64);
     for y in 0..rh {
@@ -413,6 +436,10 @@ pub fn measure_blob_with<P: Px>(
                     sw += wgt;
                     swx += wgt * x as f64;
                     swy += wgt * y as f64;
+                    let cw = centre_weight(i, x, y);
+                    hw += cw;
+                    hwx += cw * x as f64;
+                    hwy += cw * y as f64;
                 }
             }
         }
@@ -443,9 +470,21 @@ pub fn measure_blob_with<P: Px>(
     if !(sw > 0.0) {
         return None;
     }
+    let edge_sigma =
+        std::f64::consts::PI.sqrt() * edge / (2.0 * (std::f64::consts::PI * area.max(1.0)).sqrt());
+    let (mut cx, mut cy) = (swx / sw, swy / sw);
+    if loc == Localiser::Coverage && hw > 0.0 {
+        // A sharp edge: full-range coverage is exact (each edge pixel's
+        // value is linear in the area it covers) and the upper-part centre
+        // would only add pixel-grid error; a blurred edge: the upper part
+        // (see `centre_weight`). In between, a blend.
+        let t = ((edge_sigma - CENTRE_BLUR.0) / (CENTRE_BLUR.1 - CENTRE_BLUR.0)).clamp(0.0, 1.0);
+        cx = (1.0 - t) * cx + t * hwx / hw;
+        cy = (1.0 - t) * cy + t * hwy / hw;
+    }
     Some(BlobMeasure {
-        x: roi.x0 as f64 + swx / sw,
-        y: roi.y0 as f64 + swy / sw,
+        x: roi.x0 as f64 + cx,
+        y: roi.y0 as f64 + cy,
         area_px: area,
         lo,
         hi,
@@ -456,7 +495,6 @@ pub fn measure_blob_with<P: Px>(
         touches_border,
         noise,
         energy,
-        edge_sigma: std::f64::consts::PI.sqrt() * edge
-            / (2.0 * (std::f64::consts::PI * area.max(1.0)).sqrt()),
+        edge_sigma,
     })
 }
