@@ -281,7 +281,7 @@ pub fn run_lab(mode: LabMode, progress: &Progress) -> VisionLab {
             vec![0.0, 8.0, 24.0],
             vec![
                 ("noise", vec![0.0, 64.0, 128.0, 256.0]),
-                ("blur", vec![0.0, 4.0, 6.0, 8.0]),
+                ("blur", vec![0.0, 4.0, 8.0, 20.0]),
                 ("contrast", vec![1.0, 0.05, 0.02, 0.01]),
                 ("rotation", vec![0.0, 8.0, 20.0]),
             ],
@@ -296,7 +296,10 @@ pub fn run_lab(mode: LabMode, progress: &Progress) -> VisionLab {
                         0.0, 4.0, 8.0, 16.0, 24.0, 32.0, 48.0, 64.0, 96.0, 128.0, 192.0, 256.0,
                     ],
                 ),
-                ("blur", vec![0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0]),
+                (
+                    "blur",
+                    vec![0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 20.0],
+                ),
                 (
                     "contrast",
                     vec![1.0, 0.5, 0.25, 0.15, 0.1, 0.07, 0.05, 0.03, 0.02, 0.01],
@@ -454,7 +457,7 @@ mod tests {
             assert_eq!(first.verdict_accuracy, 1.0, "{f} at {}", first.level);
         }
         // Each axis of the quick sweep reaches a level where the pipeline
-        // is no longer right: noise 256 DN, blur 8 px, contrast 1 %,
+        // is no longer right: noise 256 DN, blur 20 px, contrast 1 %,
         // rotation 20° (beyond the lattice search's ±12°).
         for f in ["noise", "blur", "contrast", "rotation"] {
             let last = lab

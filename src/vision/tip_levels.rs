@@ -53,7 +53,7 @@ pub(crate) fn area_ratio_of(
 
 /// Blur (edge σ) beyond this fraction of the tip width: tip areas are
 /// judged against the neighbouring tips' energy.
-pub(crate) const BLUR_RELATIVE: f64 = 0.15;
+pub(crate) const BLUR_RELATIVE: f64 = 0.08;
 
 /// A blob counts as tip-bright when its level stands at least this
 /// fraction of the way from the local background to the local tip level.
