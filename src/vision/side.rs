@@ -25,6 +25,7 @@ use super::label;
 use super::measure::{self, Localiser, Roi};
 use super::recipe::{Polarity, Recipe};
 use super::result::*;
+use super::side_row::{bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale};
 use super::tip_levels;
 
 /// A bar (pin candidate) measured at full resolution.
@@ -36,182 +37,6 @@ struct Bar {
     /// Along-row coordinate of the tip (projection on the edge direction), px.
     u_px: f64,
     height_px: f64,
-}
-
-/// Half-level crossing in a profile: first index pair (from the start)
-/// where the profile passes `level` going up; returns the fractional index.
-fn first_rise(prof: &[f32], level: f32) -> Option<f64> {
-    for i in 1..prof.len() {
-        if prof[i - 1] < level && prof[i] >= level {
-            let f = (level - prof[i - 1]) / (prof[i] - prof[i - 1]);
-            return Some((i - 1) as f64 + f as f64);
-        }
-    }
-    None
-}
-
-fn median_f32(v: &mut [f32]) -> f32 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let m = v.len() / 2;
-    *v.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
-}
-
-/// The two half-level edge crossings of a bar in a row profile (sign space:
-/// bar high): each edge is placed halfway between the bar's interior level
-/// and the background level on its own side, so uneven backlight does not
-/// shift the centre. Returns fractional indices (left, right).
-fn bar_edges(prof: &[f32]) -> Option<(f64, f64)> {
-    let n = prof.len();
-    if n < 12 {
-        return None;
-    }
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for &v in prof {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    let mid = 0.5 * (lo + hi);
-    let l0 = prof.iter().position(|&v| v >= mid)?;
-    let r0 = n - 1 - prof.iter().rev().position(|&v| v >= mid)?;
-    if r0 < l0 + 4 || l0 < 5 || r0 + 5 >= n {
-        return None;
-    }
-    let mut inner: Vec<f32> = prof[l0 + 2..=r0 - 2].to_vec();
-    let level_in = median_f32(&mut inner);
-    let mut left: Vec<f32> = prof[l0.saturating_sub(7)..l0 - 2].to_vec();
-    let mut right: Vec<f32> = prof[r0 + 3..(r0 + 8).min(n)].to_vec();
-    let (bl, br) = (median_f32(&mut left), median_f32(&mut right));
-    let half_l = 0.5 * (bl + level_in);
-    let half_r = 0.5 * (br + level_in);
-    // Left: last rise through half_l before the interior.
-    let mut xl = None;
-    for i in (1..=l0 + 1).rev() {
-        if prof[i - 1] < half_l && prof[i] >= half_l {
-            xl = Some((i - 1) as f64 + ((half_l - prof[i - 1]) / (prof[i] - prof[i - 1])) as f64);
-            break;
-        }
-    }
-    let mut xr = None;
-    for i in r0.saturating_sub(1)..n - 1 {
-        if prof[i] >= half_r && prof[i + 1] < half_r {
-            xr = Some(i as f64 + ((prof[i] - half_r) / (prof[i] - prof[i + 1])) as f64);
-            break;
-        }
-    }
-    Some((xl?, xr?))
-}
-
-/// Robust 1-D fit u = a + b·n (n nominal mm, u measured px) with `b` fixed
-/// when the scale is known; Tukey IRLS with MAD scale floored at `floor`.
-fn robust_offset_scale(
-    n: &[f64],
-    u: &[f64],
-    fixed_b: Option<f64>,
-    floor: f64,
-) -> Option<(f64, f64, Vec<bool>, f64)> {
-    let k = n.len();
-    if k == 0 || (fixed_b.is_none() && k < 2) {
-        return None;
-    }
-    let solve = |w: &[f64]| -> Option<(f64, f64)> {
-        let sw: f64 = w.iter().sum();
-        if !(sw > 0.0) {
-            return None;
-        }
-        match fixed_b {
-            Some(b) => {
-                let a = n
-                    .iter()
-                    .zip(u)
-                    .zip(w)
-                    .map(|((n, u), w)| w * (u - b * n))
-                    .sum::<f64>()
-                    / sw;
-                Some((a, b))
-            }
-            None => {
-                let mn = n.iter().zip(w).map(|(n, w)| w * n).sum::<f64>() / sw;
-                let mu = u.iter().zip(w).map(|(u, w)| w * u).sum::<f64>() / sw;
-                let (mut snn, mut snu) = (0.0, 0.0);
-                for ((n, u), w) in n.iter().zip(u).zip(w) {
-                    snn += w * (n - mn) * (n - mn);
-                    snu += w * (n - mn) * (u - mu);
-                }
-                if snn <= 1e-12 {
-                    return None;
-                }
-                let b = snu / snn;
-                Some((mu - b * mn, b))
-            }
-        }
-    };
-    // Start from the median offset (or the plain fit).
-    let (mut a, mut b) = match fixed_b {
-        Some(b) => {
-            let mut d: Vec<f64> = n.iter().zip(u).map(|(n, u)| u - b * n).collect();
-            (grid::median(&mut d)?, b)
-        }
-        None => solve(&vec![1.0; k])?,
-    };
-    let mut sigma = floor;
-    for _ in 0..10 {
-        let r: Vec<f64> = n
-            .iter()
-            .zip(u)
-            .map(|(n, u)| (u - a - b * n).abs())
-            .collect();
-        let mut rr = r.clone();
-        sigma = (1.4826 * grid::median(&mut rr).unwrap_or(0.0)).max(floor);
-        let c = 4.685 * sigma;
-        let w: Vec<f64> = r
-            .iter()
-            .map(|ri| {
-                let t = ri / c;
-                if t < 1.0 { (1.0 - t * t).powi(2) } else { 0.0 }
-            })
-            .collect();
-        match solve(&w) {
-            Some((na, nb)) => {
-                let moved = (na - a).abs() + (nb - b).abs();
-                a = na;
-                b = nb;
-                if moved < 1e-9 {
-                    break;
-                }
-            }
-            None => break,
-        }
-    }
-    let c = 4.685 * sigma;
-    let inl: Vec<bool> = n
-        .iter()
-        .zip(u)
-        .map(|(n, u)| (u - a - b * n).abs() < c)
-        .collect();
-    let w: Vec<f64> = inl.iter().map(|&x| if x { 1.0 } else { 0.0 }).collect();
-    if let Some((na, nb)) = solve(&w) {
-        a = na;
-        b = nb;
-    }
-    let (mut ss, mut m) = (0.0, 0);
-    for ((n, u), &i) in n.iter().zip(u).zip(&inl) {
-        if i {
-            ss += (u - a - b * n).powi(2);
-            m += 1;
-        }
-    }
-    Some((
-        a,
-        b,
-        inl,
-        if m > 0 {
-            (ss / m as f64).sqrt()
-        } else {
-            f64::NAN
-        },
-    ))
 }
 
 /// Least contrast of a dust shadow, as a fraction of the silhouette's
@@ -481,34 +306,61 @@ pub fn inspect_side<P: Px>(
     // 5. Along-row placement: 1-D lattice, housing anchor, robust fit.
     let pitch_mm = recipe.pitch_mm[0];
     let fixed_s = recipe.mm_per_px.map(|m| 1.0 / m);
+    // Spacings along the row between neighbouring bars (a missing pin
+    // leaves a double spacing, so neither a median nor the smallest spacing
+    // is the pitch on its own).
+    let spacings: Vec<f64> = {
+        let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+        u.sort_by(|a, b| a.total_cmp(b));
+        u.windows(2).map(|w| w[1] - w[0]).collect()
+    };
     let pitch_px = match fixed_s {
         Some(s) => pitch_mm * s,
         None => {
-            let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
-            u.sort_by(|a, b| a.total_cmp(b));
-            let mut d: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
-            grid::median(&mut d).ok_or_else(|| VisionError::NoPins {
-                part: part.clone(),
-                msg: "cannot estimate mm_per_px from fewer than two pins".into(),
-            })?
+            // The pins' own width is a second ruler (pin_mm is known): it
+            // sets the scale of the spacings, which then refine it.
+            let mut w: Vec<f64> = bars.iter().map(|b| b.width_px).collect();
+            let width_px = grid::median(&mut w).unwrap_or(f64::NAN);
+            let prior = pitch_mm * width_px / recipe.pin_mm;
+            let mut d = spacings.clone();
+            match refine_pitch(&spacings, prior).or_else(|| grid::median(&mut d)) {
+                Some(p) => p,
+                None if prior.is_finite() && prior > 0.0 => {
+                    warnings.push(format!(
+                        "one pin only: mm_per_px taken from its width ({:.5}), not from the pitch",
+                        recipe.pin_mm / width_px
+                    ));
+                    prior
+                }
+                None => {
+                    return Err(VisionError::NoPins {
+                        part: part.clone(),
+                        msg: "cannot estimate mm_per_px: no pin width measured".into(),
+                    });
+                }
+            }
         }
     };
-    // Reject the wrong part: bars at a spacing unlike the recipe's.
+    // Reject the wrong part: bars at spacings unlike the recipe's pitch
+    // (most spacings must be whole multiples of it).
     if fixed_s.is_some() && bars.len() >= 3 {
-        let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
-        u.sort_by(|a, b| a.total_cmp(b));
-        let mut d: Vec<f64> = u.windows(2).map(|w| w[1] - w[0]).collect();
-        if let Some(md) = grid::median(&mut d) {
-            let ratio = md / pitch_px;
-            if (ratio - ratio.round()).abs() > 0.2 || ratio < 0.8 {
-                return Err(VisionError::WrongPart {
-                    part,
-                    msg: format!(
-                        "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
-                        recipe.mm_per_px.unwrap_or(f64::NAN)
-                    ),
-                });
-            }
+        let on_pitch = spacings
+            .iter()
+            .filter(|&&d| {
+                let r = d / pitch_px;
+                r >= 0.8 && (r - r.round()).abs() <= 0.2
+            })
+            .count();
+        if 2 * on_pitch < spacings.len() {
+            let mut d = spacings.clone();
+            let md = grid::median(&mut d).unwrap_or(f64::NAN);
+            return Err(VisionError::WrongPart {
+                part,
+                msg: format!(
+                    "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
+                    recipe.mm_per_px.unwrap_or(f64::NAN)
+                ),
+            });
         }
     }
     let u_ref = bars[0].u_px;
@@ -569,8 +421,11 @@ pub fn inspect_side<P: Px>(
             uu.push(b.u_px);
         }
     }
+    // One pin on the grid and no mm_per_px: the scale from the pitch
+    // estimate (which then came from the pin's width).
+    let fit_s = fixed_s.or((nn.len() < 2).then_some(pitch_px / pitch_mm));
     let (a_u, s, inl, rms) =
-        robust_offset_scale(&nn, &uu, fixed_s, 0.1).ok_or_else(|| VisionError::NoPins {
+        robust_offset_scale(&nn, &uu, fit_s, 0.1).ok_or_else(|| VisionError::NoPins {
             part: part.clone(),
             msg: "cannot fit the pin row (need two pins to estimate mm_per_px)".into(),
         })?;

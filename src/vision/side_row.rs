@@ -1,0 +1,216 @@
+//! One-dimensional measurements of the side view: half-level crossings
+//! and a bar's two edges in a profile, the pitch from the spacings between
+//! pins, and the robust offset/scale fit of the pin row. Kept apart from
+//! `side.rs` (the pipeline) so each can be read and tested on its own.
+
+use super::grid;
+
+/// Half-level crossing in a profile: first index pair (from the start)
+/// where the profile passes `level` going up; returns the fractional index.
+pub(super) fn first_rise(prof: &[f32], level: f32) -> Option<f64> {
+    for i in 1..prof.len() {
+        if prof[i - 1] < level && prof[i] >= level {
+            let f = (level - prof[i - 1]) / (prof[i] - prof[i - 1]);
+            return Some((i - 1) as f64 + f as f64);
+        }
+    }
+    None
+}
+
+pub(super) fn median_f32(v: &mut [f32]) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let m = v.len() / 2;
+    *v.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
+}
+
+/// The two half-level edge crossings of a bar in a row profile (sign space:
+/// bar high): each edge is placed halfway between the bar's interior level
+/// and the background level on its own side, so uneven backlight does not
+/// shift the centre. Returns fractional indices (left, right).
+pub(super) fn bar_edges(prof: &[f32]) -> Option<(f64, f64)> {
+    let n = prof.len();
+    if n < 12 {
+        return None;
+    }
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for &v in prof {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    let mid = 0.5 * (lo + hi);
+    let l0 = prof.iter().position(|&v| v >= mid)?;
+    let r0 = n - 1 - prof.iter().rev().position(|&v| v >= mid)?;
+    if r0 < l0 + 4 || l0 < 5 || r0 + 5 >= n {
+        return None;
+    }
+    let mut inner: Vec<f32> = prof[l0 + 2..=r0 - 2].to_vec();
+    let level_in = median_f32(&mut inner);
+    let mut left: Vec<f32> = prof[l0.saturating_sub(7)..l0 - 2].to_vec();
+    let mut right: Vec<f32> = prof[r0 + 3..(r0 + 8).min(n)].to_vec();
+    let (bl, br) = (median_f32(&mut left), median_f32(&mut right));
+    let half_l = 0.5 * (bl + level_in);
+    let half_r = 0.5 * (br + level_in);
+    // Left: last rise through half_l before the interior.
+    let mut xl = None;
+    for i in (1..=l0 + 1).rev() {
+        if prof[i - 1] < half_l && prof[i] >= half_l {
+            xl = Some((i - 1) as f64 + ((half_l - prof[i - 1]) / (prof[i] - prof[i - 1])) as f64);
+            break;
+        }
+    }
+    let mut xr = None;
+    for i in r0.saturating_sub(1)..n - 1 {
+        if prof[i] >= half_r && prof[i + 1] < half_r {
+            xr = Some(i as f64 + ((prof[i] - half_r) / (prof[i] - prof[i + 1])) as f64);
+            break;
+        }
+    }
+    Some((xl?, xr?))
+}
+
+/// Robust 1-D fit u = a + b·n (n nominal mm, u measured px) with `b` fixed
+/// when the scale is known; Tukey IRLS with MAD scale floored at `floor`.
+pub(super) fn robust_offset_scale(
+    n: &[f64],
+    u: &[f64],
+    fixed_b: Option<f64>,
+    floor: f64,
+) -> Option<(f64, f64, Vec<bool>, f64)> {
+    let k = n.len();
+    if k == 0 || (fixed_b.is_none() && k < 2) {
+        return None;
+    }
+    let solve = |w: &[f64]| -> Option<(f64, f64)> {
+        let sw: f64 = w.iter().sum();
+        if !(sw > 0.0) {
+            return None;
+        }
+        match fixed_b {
+            Some(b) => {
+                let a = n
+                    .iter()
+                    .zip(u)
+                    .zip(w)
+                    .map(|((n, u), w)| w * (u - b * n))
+                    .sum::<f64>()
+                    / sw;
+                Some((a, b))
+            }
+            None => {
+                let mn = n.iter().zip(w).map(|(n, w)| w * n).sum::<f64>() / sw;
+                let mu = u.iter().zip(w).map(|(u, w)| w * u).sum::<f64>() / sw;
+                let (mut snn, mut snu) = (0.0, 0.0);
+                for ((n, u), w) in n.iter().zip(u).zip(w) {
+                    snn += w * (n - mn) * (n - mn);
+                    snu += w * (n - mn) * (u - mu);
+                }
+                if snn <= 1e-12 {
+                    return None;
+                }
+                let b = snu / snn;
+                Some((mu - b * mn, b))
+            }
+        }
+    };
+    // Start from the median offset (or the plain fit).
+    let (mut a, mut b) = match fixed_b {
+        Some(b) => {
+            let mut d: Vec<f64> = n.iter().zip(u).map(|(n, u)| u - b * n).collect();
+            (grid::median(&mut d)?, b)
+        }
+        None => solve(&vec![1.0; k])?,
+    };
+    let mut sigma = floor;
+    for _ in 0..10 {
+        let r: Vec<f64> = n
+            .iter()
+            .zip(u)
+            .map(|(n, u)| (u - a - b * n).abs())
+            .collect();
+        let mut rr = r.clone();
+        sigma = (1.4826 * grid::median(&mut rr).unwrap_or(0.0)).max(floor);
+        let c = 4.685 * sigma;
+        let w: Vec<f64> = r
+            .iter()
+            .map(|ri| {
+                let t = ri / c;
+                if t < 1.0 { (1.0 - t * t).powi(2) } else { 0.0 }
+            })
+            .collect();
+        match solve(&w) {
+            Some((na, nb)) => {
+                let moved = (na - a).abs() + (nb - b).abs();
+                a = na;
+                b = nb;
+                if moved < 1e-9 {
+                    break;
+                }
+            }
+            None => break,
+        }
+    }
+    let c = 4.685 * sigma;
+    let inl: Vec<bool> = n
+        .iter()
+        .zip(u)
+        .map(|(n, u)| (u - a - b * n).abs() < c)
+        .collect();
+    let w: Vec<f64> = inl.iter().map(|&x| if x { 1.0 } else { 0.0 }).collect();
+    if let Some((na, nb)) = solve(&w) {
+        a = na;
+        b = nb;
+    }
+    let (mut ss, mut m) = (0.0, 0);
+    for ((n, u), &i) in n.iter().zip(u).zip(&inl) {
+        if i {
+            ss += (u - a - b * n).powi(2);
+            m += 1;
+        }
+    }
+    Some((
+        a,
+        b,
+        inl,
+        if m > 0 {
+            (ss / m as f64).sqrt()
+        } else {
+            f64::NAN
+        },
+    ))
+}
+
+/// The pitch from the spacings between neighbouring pins, given a rough
+/// `prior` (from the pins' width): each spacing is divided by the whole
+/// number of pitches it spans, and the median taken over those that sit
+/// near a whole number. `None` without a usable spacing.
+pub(super) fn refine_pitch(spacings: &[f64], prior: f64) -> Option<f64> {
+    if !(prior.is_finite() && prior > 0.0) {
+        let mut d = spacings.to_vec();
+        return grid::median(&mut d);
+    }
+    let mut est: Vec<f64> = spacings
+        .iter()
+        .filter_map(|&d| {
+            let k = (d / prior).round();
+            (k >= 1.0 && (d / prior - k).abs() < 0.3).then_some(d / k)
+        })
+        .collect();
+    grid::median(&mut est)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn pitch_from_spacings_with_a_missing_pin_between() {
+        // Pins at 0, 10, 30 (one missing): the median of [10, 20] would be
+        // 15; with a width prior of 9 px the spacings give 10.
+        let p = super::refine_pitch(&[10.0, 20.0], 9.0).unwrap();
+        assert!((p - 10.0).abs() < 1e-9, "{p}");
+        // Spacings far from any whole multiple of the prior are ignored.
+        let p = super::refine_pitch(&[10.0, 14.5, 30.3], 10.0).unwrap();
+        assert!((p - 10.05).abs() < 1e-9, "{p}");
+        assert_eq!(super::refine_pitch(&[], 10.0), None);
+    }
+}
