@@ -314,7 +314,6 @@ const NOT_YET_SPLIT: &[(&str, usize)] = &[
     ("rig/load.rs", 843),
     ("rig/mcap_read.rs", 1437),
     ("rig/synth.rs", 890),
-    ("tui/panes.rs", 971),
 ];
 
 #[test]

@@ -1,0 +1,88 @@
+//! Drawing of the Overlay pane: measured against predicted, cycle by cycle.
+
+use super::*;
+
+pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme) {
+    let [left, side] =
+        Layout::horizontal([Constraint::Percentage(62), Constraint::Percentage(38)]).areas(area);
+    let charts = v.charts();
+    if charts.is_empty() {
+        message(
+            f,
+            left,
+            "Overlay",
+            v.message.as_deref().unwrap_or("nothing to show"),
+            theme.muted(),
+            theme,
+        );
+    } else {
+        let n = charts.len() as u32;
+        let rows = Layout::vertical(charts.iter().map(|_| Constraint::Ratio(1, n))).split(left);
+        for (c, r) in charts.iter().zip(rows.iter()) {
+            draw_chart(f, *r, c, theme);
+        }
+    }
+    let mut lines = Vec::new();
+    if let Some(s) = &v.source {
+        lines.push(kv_line("log", s.clone(), theme));
+    }
+    lines.push(kv_line("showing", v.showing.clone(), theme));
+    lines.push(kv_line(
+        "level",
+        v.level.clone().unwrap_or_else(|| "–".into()),
+        theme,
+    ));
+    if let Some(r) = &v.level_reason {
+        lines.push(Line::styled(format!("  why: {r}"), theme.muted()));
+    }
+    for (k, x) in &v.figures {
+        let shown = if x.fract() == 0.0 && x.abs() < 1e9 {
+            format!("{x:.0}")
+        } else {
+            format_value(*x)
+        };
+        lines.push(kv_line(k, shown, theme));
+    }
+    if let Some(m) = &v.message {
+        lines.push(Line::raw(""));
+        lines.push(Line::styled(m.clone(), theme.warn()));
+    }
+    let table_h = if v.cycles.is_empty() {
+        0
+    } else {
+        (v.cycles.len() as u16 + 3).min(side.height / 2)
+    };
+    let [info, table_area] =
+        Layout::vertical([Constraint::Min(4), Constraint::Length(table_h)]).areas(side);
+    text_block(f, info, "Fidelity and figures", lines, theme);
+    if table_h > 0 {
+        let rows: Vec<Row> = v
+            .cycles
+            .iter()
+            .map(|c| {
+                Row::new(vec![
+                    c.index.to_string(),
+                    opt(c.stroke_rms_mm),
+                    opt(c.force_rms_n),
+                    c.note.clone(),
+                ])
+            })
+            .collect();
+        let t = Table::new(
+            rows,
+            [
+                Constraint::Length(6),
+                Constraint::Length(9),
+                Constraint::Length(9),
+                Constraint::Min(4),
+            ],
+        )
+        .header(Row::new(vec!["cycle", "RMS s mm", "RMS F N", "note"]).style(theme.header()))
+        .row_highlight_style(theme.selected())
+        .block(block("Cycles", theme));
+        let mut st = TableState::default().with_selected(v.selected);
+        f.render_stateful_widget(t, table_area, &mut st);
+    }
+}
+
+// ---------------------------------------------------------------- Model
