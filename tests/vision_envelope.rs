@@ -4,7 +4,7 @@
 //! held out: the pipeline was tuned on 0 … 999 (`examples/eval_envelope`).
 //!
 //! The floors below are a **ratchet at the level measured when this test
-//! was written** (2026-11-24: 89.2 % verdicts, 97.89 % pin statuses, 8
+//! was written** (2026-11-24: 90.0 % verdicts, 98.14 % pin statuses, 6
 //! errors, median 0.081 px on these 240), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
@@ -91,17 +91,17 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 89.0,
+        pct(right, n) >= 90.0,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );
     assert!(
-        pct(pins - pins_wrong, pins) >= 97.8,
+        pct(pins - pins_wrong, pins) >= 98.1,
         "pin statuses right: {:.2} %",
         pct(pins - pins_wrong, pins)
     );
     assert!(
-        errors <= 8,
+        errors <= 6,
         "{errors} images inside the envelope ended as errors"
     );
     assert!(median <= 0.085, "ok-pin centre error median {median:.3} px");

@@ -79,7 +79,7 @@ pub fn inspect_side<P: Px>(
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
     // 1. Housing edge, coarse: top of the longest silhouette run per column.
-    let min_run = (ch / 10).max(3);
+    let min_run = (ch / 40).max(3);
     let mut tops: Vec<(f64, f64)> = Vec::new();
     for x in 0..cw {
         let (mut best, mut best_start, mut run, mut start) = (0usize, 0usize, 0usize, 0usize);
