@@ -7,8 +7,8 @@
 //! `--save DIR` writes each wrongly judged image (PNG, 16-bit where the
 //! case was), its truth and its recipe for a closer look; `--list` prints
 //! one line per wrong case.
-use pinsight::vision::synth_envelope::{EnvelopeCase, Factors};
-use pinsight::vision::{self, InspectOptions, PinStatus, Verdict, truth};
+use pinsight::vision::synth_envelope::{EnvelopeCase, Factors, Rendered};
+use pinsight::vision::{self, InspectOptions, Verdict};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -72,15 +72,10 @@ fn main() {
                     o.detail = format!("ERROR {e}");
                 }
                 Ok(ins) => {
-                    let c = truth::compare(&ins, &r.truth, 0.5 * case.factors.tip_px.max(8.0) + 6.0);
+                    let c = r.compare(&case.factors, &ins);
                     o.verdict_ok = c.verdict_ok;
                     o.pin_wrong = c.status_mismatches.len();
-                    o.ok_sq = c
-                        .centre_errors
-                        .iter()
-                        .filter(|e| e.2 == PinStatus::Ok)
-                        .map(|e| e.3 * e.3 + e.4 * e.4)
-                        .collect();
+                    o.ok_sq = Rendered::ok_centre_errors(&c).iter().map(|e| e * e).collect();
                     if !c.verdict_ok || o.pin_wrong > 0 {
                         o.detail = format!(
                             "verdict {:?} (truth {:?}), pins {:?}, extras found {}/{} spurious {}{}",

@@ -10,8 +10,8 @@
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
 
-use pinsight::vision::synth_envelope::EnvelopeCase;
-use pinsight::vision::{self, InspectOptions, PinStatus, View, truth};
+use pinsight::vision::synth_envelope::{EnvelopeCase, Rendered};
+use pinsight::vision::{self, InspectOptions, View};
 use rayon::prelude::*;
 
 struct Outcome {
@@ -45,15 +45,10 @@ fn run(seed: u64) -> Outcome {
             o.pins_wrong = o.pins;
         }
         Ok(ins) => {
-            let c = truth::compare(&ins, &r.truth, 0.5 * case.factors.tip_px.max(8.0) + 6.0);
+            let c = r.compare(&case.factors, &ins);
             o.verdict_ok = c.verdict_ok;
             o.pins_wrong = c.status_mismatches.len();
-            o.ok_errors = c
-                .centre_errors
-                .iter()
-                .filter(|e| e.2 == PinStatus::Ok)
-                .map(|e| e.3.hypot(e.4))
-                .collect();
+            o.ok_errors = Rendered::ok_centre_errors(&c);
         }
     }
     o

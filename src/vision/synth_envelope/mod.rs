@@ -236,6 +236,23 @@ pub struct Rendered {
     pub truth: Truth,
 }
 
+impl Rendered {
+    /// Compares an inspection of this image with its truth; extras are
+    /// matched within half a tip (at least 4 px) plus 6 px.
+    pub fn compare(&self, f: &Factors, ins: &super::Inspection) -> super::truth::Comparison {
+        super::truth::compare(ins, &self.truth, 0.5 * f.tip_px.max(8.0) + 6.0)
+    }
+
+    /// Centre errors (px) of the pins that are truly ok, from a comparison.
+    pub fn ok_centre_errors(c: &super::truth::Comparison) -> Vec<f64> {
+        c.centre_errors
+            .iter()
+            .filter(|e| e.2 == PinStatus::Ok)
+            .map(|e| e.3.hypot(e.4))
+            .collect()
+    }
+}
+
 fn pick<T: Copy>(rng: &mut Rng, v: &[T]) -> T {
     v[((rng.uniform() * v.len() as f64) as usize).min(v.len() - 1)]
 }

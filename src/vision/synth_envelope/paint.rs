@@ -399,27 +399,37 @@ impl EnvelopeCase {
                 offset_mm: Some(off),
             });
         }
-        let mut truth_extras = Vec::new();
-        for e in &self.extras {
-            let s = self.extra_shape(e);
-            paint_shape(
-                img,
-                w,
-                h,
-                &s,
-                f.edge_ramp_px,
-                4,
-                e.opacity as f32,
-                |_, _| rim,
-            );
-            let (_, cx, cy) = s.area_centroid();
-            truth_extras.push(TruthExtra {
-                x_px: cx,
-                y_px: cy,
-                kind: Some("debris".into()),
-            });
-        }
+        let truth_extras = self.paint_extras(img, rim, "debris");
         (truth_pins, truth_extras)
+    }
+
+    /// Paints every extra (debris on a top view, dust in a side view's
+    /// backlight) at `level`, and returns their truth (area centroids).
+    fn paint_extras(&self, img: &mut [f32], level: f32, kind: &str) -> Vec<TruthExtra> {
+        let f = &self.factors;
+        let (w, h) = (f.width as usize, f.height as usize);
+        self.extras
+            .iter()
+            .map(|e| {
+                let s = self.extra_shape(e);
+                paint_shape(
+                    img,
+                    w,
+                    h,
+                    &s,
+                    f.edge_ramp_px,
+                    4,
+                    e.opacity as f32,
+                    |_, _| level,
+                );
+                let (_, cx, cy) = s.area_centroid();
+                TruthExtra {
+                    x_px: cx,
+                    y_px: cy,
+                    kind: Some(kind.into()),
+                }
+            })
+            .collect()
     }
 
     fn paint_side(&self, img: &mut [f32]) -> (Vec<TruthPin>, Vec<TruthExtra>) {
@@ -512,26 +522,7 @@ impl EnvelopeCase {
                 offset_mm: Some(p.offset_mm.0.abs()),
             });
         }
-        let mut truth_extras = Vec::new();
-        for e in &self.extras {
-            let s = self.extra_shape(e);
-            paint_shape(
-                img,
-                w,
-                h,
-                &s,
-                f.edge_ramp_px,
-                4,
-                e.opacity as f32,
-                |_, _| solid,
-            );
-            let (_, cx, cy) = s.area_centroid();
-            truth_extras.push(TruthExtra {
-                x_px: cx,
-                y_px: cy,
-                kind: Some("dust".into()),
-            });
-        }
+        let truth_extras = self.paint_extras(img, solid, "dust");
         (truth_pins, truth_extras)
     }
 
