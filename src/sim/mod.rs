@@ -250,12 +250,29 @@ pub enum SimError {
         crank_deg: f64,
         what: String,
     },
+    #[error(
+        "the run produced a non-finite {0} (NaN or infinite): no figure is reported; check the parameters (values far from any real mechanism)"
+    )]
+    NonFinite(&'static str),
     #[error("cancelled")]
     Cancelled,
 }
 
-/// Runs one simulation at the level in `opts`.
+/// Runs one simulation at the level in `opts`. A run whose figures are not
+/// all finite is an error ([`SimError::NonFinite`]), never a result.
 pub fn simulate(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResult, SimError> {
+    let r = simulate_unchecked(p, opts, progress)?;
+    match r.summary.non_finite() {
+        Some(figure) => Err(SimError::NonFinite(figure)),
+        None => Ok(r),
+    }
+}
+
+fn simulate_unchecked(
+    p: &Params,
+    opts: &SimOptions,
+    progress: &Progress,
+) -> Result<SimResult, SimError> {
     p.validate()?;
     opts.validate()?;
     if p.driver == Driver::Motor || opts.level == Level::Motor {

@@ -61,6 +61,33 @@ pub struct Summary {
     pub double_crossings_caught: u64,
 }
 
+impl Summary {
+    /// The first figure that must be a number and is not (NaN or
+    /// infinite), by its key. The contact figures (`peak_contact_force_n`,
+    /// `peak_penetration_um`) are left out: they are undefined, not wrong,
+    /// in a run with no contact.
+    pub fn non_finite(&self) -> Option<&'static str> {
+        let figures = [
+            ("peak_accel_mps2", Some(self.peak_accel_mps2)),
+            ("disp_dev_mean_mm", Some(self.disp_dev_mean_mm)),
+            ("disp_dev_max_mm", Some(self.disp_dev_max_mm)),
+            ("vel_dev_mean_mps", Some(self.vel_dev_mean_mps)),
+            ("vel_dev_max_mps", Some(self.vel_dev_max_mps)),
+            ("peak_torque_nm", self.peak_torque_nm),
+            ("torque_dev_rms_nm", self.torque_dev_rms_nm),
+            ("stroke_min_mm", Some(self.stroke_min_mm)),
+            ("stroke_max_mm", Some(self.stroke_max_mm)),
+            ("peak_process_force_n", self.peak_process_force_n),
+            ("ideal_peak_accel_mps2", Some(self.ideal_peak_accel_mps2)),
+            ("ideal_peak_torque_nm", self.ideal_peak_torque_nm),
+        ];
+        figures
+            .into_iter()
+            .find(|(_, v)| v.is_some_and(|v| !v.is_finite()))
+            .map(|(k, _)| k)
+    }
+}
+
 /// Quantities whose continuous-time maxima are tracked.
 pub(crate) const NQ: usize = 9;
 pub(crate) const Q_ACC: usize = 0;
@@ -182,6 +209,19 @@ fn parabola_peak(t0: f64, v0: f64, t1: f64, v1: f64, t2: f64, v2: f64) -> Option
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_non_finite_figure_is_named() {
+        let mut s = Summary::default();
+        assert_eq!(s.non_finite(), None);
+        // No contact: the contact figures are undefined, not an error.
+        s.peak_contact_force_n = f64::NAN;
+        assert_eq!(s.non_finite(), None);
+        s.peak_torque_nm = Some(f64::INFINITY);
+        assert_eq!(s.non_finite(), Some("peak_torque_nm"));
+        s.peak_accel_mps2 = f64::NAN;
+        assert_eq!(s.non_finite(), Some("peak_accel_mps2"));
+    }
+
     use super::*;
 
     #[test]
