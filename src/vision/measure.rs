@@ -149,10 +149,6 @@ pub fn measure_blob<P: Px>(
     measure_blob_with(plane, sign, roi, seed, loc, dilate, None)
 }
 
-/// [`measure_blob`] with a floor under the full-coverage level: a blob
-/// fainter than `hi_floor` (the level a tip has at that place) is measured
-/// as the area a tip-bright blob of the same energy would have, so a faint
-/// stain does not count as a large extra.
 /// Where, from the local background (0) to the tip's rim level (1), the
 /// coverage that locates a tip's centre starts (see `measure_blob_with`).
 pub const CENTRE_LEVEL: f32 = 0.5;
@@ -161,6 +157,10 @@ pub const CENTRE_LEVEL: f32 = 0.5;
 /// upper-part one; blended linearly between.
 pub const CENTRE_BLUR: (f64, f64) = (0.6, 1.5);
 
+/// [`measure_blob`] with a floor under the full-coverage level: a blob
+/// fainter than `hi_floor` (the level a tip has at that place) is measured
+/// as the area a tip-bright blob of the same energy would have, so a faint
+/// stain does not count as a large extra.
 pub fn measure_blob_with<P: Px>(
     plane: &Plane<P>,
     sign: f32,
@@ -398,11 +398,14 @@ pub fn measure_blob_with<P: Px>(
         })
         .collect();
     let lo = lo0;
-    let weight = |i: usize, x: usize, y: usize| -> f64 {
+    // Coverage of pixel i counted from `from` of the way between the local
+    // background and `hi_cov` (0: the full range).
+    let coverage = |i: usize, x: usize, y: usize, from: f32| -> f64 {
         if mask[i] != 0 && v[i] >= hi_cov {
             return 1.0;
         }
         let l = lo_s[sector_of(x, y)];
+        let l = l + from * (hi_cov - l);
         ((veff[i] - l) / (hi_cov - l).max(1e-6)).clamp(0.0, 1.0) as f64
     };
     // The centre is taken from the upper part of the edge (coverage from
@@ -410,15 +413,7 @@ pub fn measure_blob_with<P: Px>(
     // that sits off-centre in its clearance hole spills light onto the
     // near edge's foot and pulls a full-range coverage centroid outward;
     // the upper part of a symmetric tip's edge is symmetric still and
-    // sees less of that spill.
-    let centre_weight = |i: usize, x: usize, y: usize| -> f64 {
-        if mask[i] != 0 && v[i] >= hi_cov {
-            return 1.0;
-        }
-        let l = lo_s[sector_of(x, y)];
-        let l = l + CENTRE_LEVEL * (hi_cov - l);
-        ((veff[i] - l) / (hi_cov - l).max(1e-6)).clamp(0.0, 1.0) as f64
-    };
+    // sees less of that spill (`coverage(.., CENTRE_LEVEL)` below).
     let (mut sw, mut swx, mut swy) = (0f64, 0f64, 0f64);
     let (mut hw, mut hwx, mut hwy) = (0f64, 0f64, 0f64);
     let mut area = 0f64;
@@ -427,7 +422,7 @@ pub fn measure_blob_with<P: Px>(
         for x in 0..rw {
             let i = y * rw + x;
             if win[i] != 0 {
-                let wgt = weight(i, x, y);
+                let wgt = coverage(i, x, y, 0.0);
                 area += wgt;
                 edge += wgt * (1.0 - wgt);
                 let val = if mask[i] != 0 { v[i] } else { veff[i] };
@@ -436,7 +431,7 @@ pub fn measure_blob_with<P: Px>(
                     sw += wgt;
                     swx += wgt * x as f64;
                     swy += wgt * y as f64;
-                    let cw = centre_weight(i, x, y);
+                    let cw = coverage(i, x, y, CENTRE_LEVEL);
                     hw += cw;
                     hwx += cw * x as f64;
                     hwy += cw * y as f64;
@@ -477,7 +472,7 @@ pub fn measure_blob_with<P: Px>(
         // A sharp edge: full-range coverage is exact (each edge pixel's
         // value is linear in the area it covers) and the upper-part centre
         // would only add pixel-grid error; a blurred edge: the upper part
-        // (see `centre_weight`). In between, a blend.
+        // (`coverage` from `CENTRE_LEVEL`). In between, a blend.
         let t = ((edge_sigma - CENTRE_BLUR.0) / (CENTRE_BLUR.1 - CENTRE_BLUR.0)).clamp(0.0, 1.0);
         cx = (1.0 - t) * cx + t * hwx / hw;
         cy = (1.0 - t) * cy + t * hwy / hw;

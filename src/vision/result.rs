@@ -39,6 +39,24 @@ impl PinStatus {
             PinStatus::High => "high",
         }
     }
+
+    /// The side view's rule (spec/vision.md): `bent` when the offset along
+    /// the row exceeds `position_mm`, else `short`/`high` outside
+    /// `height_mm ± height_tol_mm`, else `ok`. One rule for the inspection
+    /// and for the generators' truth.
+    pub fn side(tol: &Tolerance, offset_mm: f64, height_mm: f64) -> PinStatus {
+        let h_nom = tol.height_mm.unwrap_or(0.0);
+        let h_tol = tol.height_tol_mm.unwrap_or(f64::INFINITY);
+        if offset_mm.abs() > tol.position_mm {
+            PinStatus::Bent
+        } else if height_mm < h_nom - h_tol {
+            PinStatus::Short
+        } else if height_mm > h_nom + h_tol {
+            PinStatus::High
+        } else {
+            PinStatus::Ok
+        }
+    }
 }
 
 /// Connector verdict.

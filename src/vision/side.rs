@@ -494,15 +494,7 @@ pub fn inspect_side<P: Px>(
             pr.offset_mm = Some(du.abs());
             pr.height_mm = Some(h);
             pr.width_ratio = Some(b.width_px * mm_per_px / recipe.pin_mm);
-            pr.status = if du.abs() > tol.position_mm {
-                PinStatus::Bent
-            } else if h < h_nom - h_tol {
-                PinStatus::Short
-            } else if h > h_nom + h_tol {
-                PinStatus::High
-            } else {
-                PinStatus::Ok
-            };
+            pr.status = PinStatus::side(tol, du, h);
             pr.reason = match pr.status {
                 PinStatus::Bent => Some(format!(
                     "offset along the row {:.3} mm = {:.2} × position_mm {}",

@@ -476,16 +476,7 @@ impl Scene {
                 let tip_area_px = r.tip_area_mm2() / (self.mm_per_px * self.mm_per_px);
                 for p in &self.pins {
                     if !p.present {
-                        truth_pins.push(TruthPin {
-                            row: p.row,
-                            col: p.col,
-                            x_px: None,
-                            y_px: None,
-                            defect: PinStatus::Missing,
-                            height_mm: None,
-                            area_ratio: None,
-                            offset_mm: None,
-                        });
+                        truth_pins.push(TruthPin::missing(p.row, p.col));
                         continue;
                     }
                     let shape = self.tip_shape(p);
@@ -574,16 +565,7 @@ impl Scene {
                     let (u, _) = r.nominal_uv_mm(p.row, p.col);
                     let u = u + p.offset_mm.0;
                     if !p.present {
-                        truth_pins.push(TruthPin {
-                            row: p.row,
-                            col: p.col,
-                            x_px: None,
-                            y_px: None,
-                            defect: PinStatus::Missing,
-                            height_mm: None,
-                            area_ratio: None,
-                            offset_mm: None,
-                        });
+                        truth_pins.push(TruthPin::missing(p.row, p.col));
                         continue;
                     }
                     let hw = r.pin_mm / 2.0;
@@ -600,17 +582,7 @@ impl Scene {
                     let bar = Shape::Poly(pts.iter().map(|(a, b)| sim.apply(*a, *b)).collect());
                     paint(&mut img, &bar, solid, 1.0);
                     let (tx, ty) = sim.apply(u, top);
-                    let h_nom = tol.height_mm.unwrap_or(0.0);
-                    let h_tol = tol.height_tol_mm.unwrap_or(f64::INFINITY);
-                    let defect = if p.offset_mm.0.abs() > tol.position_mm {
-                        PinStatus::Bent
-                    } else if p.height_mm < h_nom - h_tol {
-                        PinStatus::Short
-                    } else if p.height_mm > h_nom + h_tol {
-                        PinStatus::High
-                    } else {
-                        PinStatus::Ok
-                    };
+                    let defect = PinStatus::side(tol, p.offset_mm.0, p.height_mm);
                     truth_pins.push(TruthPin {
                         row: p.row,
                         col: p.col,

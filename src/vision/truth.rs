@@ -22,6 +22,22 @@ pub struct TruthPin {
     pub offset_mm: Option<f64>,
 }
 
+impl TruthPin {
+    /// A position with no pin.
+    pub fn missing(row: u32, col: u32) -> TruthPin {
+        TruthPin {
+            row,
+            col,
+            x_px: None,
+            y_px: None,
+            defect: PinStatus::Missing,
+            height_mm: None,
+            area_ratio: None,
+            offset_mm: None,
+        }
+    }
+}
+
 /// One extra of a truth file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TruthExtra {

@@ -339,16 +339,7 @@ impl EnvelopeCase {
         let mut truth_pins = Vec::new();
         for p in &self.pins {
             if !p.present {
-                truth_pins.push(TruthPin {
-                    row: p.row,
-                    col: p.col,
-                    x_px: None,
-                    y_px: None,
-                    defect: PinStatus::Missing,
-                    height_mm: None,
-                    area_ratio: None,
-                    offset_mm: None,
-                });
+                truth_pins.push(TruthPin::missing(p.row, p.col));
                 continue;
             }
             let shape = self.tip_shape(p);
@@ -462,23 +453,12 @@ impl EnvelopeCase {
             solid + tex_amp * grain.at(x, y)
         });
         let tol = &r.tolerance;
-        let h_nom = tol.height_mm.unwrap_or(0.0);
-        let h_tol = tol.height_tol_mm.unwrap_or(f64::INFINITY);
         let mut truth_pins = Vec::new();
         for p in &self.pins {
             let (u, _) = r.nominal_uv_mm(p.row, p.col);
             let u = u + p.offset_mm.0;
             if !p.present {
-                truth_pins.push(TruthPin {
-                    row: p.row,
-                    col: p.col,
-                    x_px: None,
-                    y_px: None,
-                    defect: PinStatus::Missing,
-                    height_mm: None,
-                    area_ratio: None,
-                    offset_mm: None,
-                });
+                truth_pins.push(TruthPin::missing(p.row, p.col));
                 continue;
             }
             let hw = r.pin_mm / 2.0;
@@ -502,15 +482,7 @@ impl EnvelopeCase {
             let bar = Shape::Poly(pts.iter().map(|&(a, b)| sim.apply(a, b)).collect());
             paint_shape(img, w, h, &bar, f.edge_ramp_px, 4, 1.0, |_, _| solid);
             let (tx, ty) = sim.apply(u, top);
-            let defect = if p.offset_mm.0.abs() > tol.position_mm {
-                PinStatus::Bent
-            } else if p.height_mm < h_nom - h_tol {
-                PinStatus::Short
-            } else if p.height_mm > h_nom + h_tol {
-                PinStatus::High
-            } else {
-                PinStatus::Ok
-            };
+            let defect = PinStatus::side(tol, p.offset_mm.0, p.height_mm);
             truth_pins.push(TruthPin {
                 row: p.row,
                 col: p.col,
