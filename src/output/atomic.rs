@@ -106,16 +106,81 @@ fn stage_error(final_path: &Path, dir: &Path, needed: u64, e: std::io::Error) ->
     }
 }
 
+/// The file a write to `path` must replace: a symbolic link is followed
+/// (the link stays, its target gets the new content, as `sed -i
+/// --follow-symlinks` does), up to 40 links deep. `None` when the path is
+/// or leads through `/dev` or `/proc` (`/dev/stdout` is a link to
+/// `/proc/self/fd/1`, whose target is the process's own output): those are
+/// written through, never replaced.
+fn follow_links(path: &Path) -> Option<PathBuf> {
+    let special = |p: &Path| p.starts_with("/dev") || p.starts_with("/proc");
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        if special(&p) {
+            return None;
+        }
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let Ok(target) = std::fs::read_link(&p) else {
+                    break;
+                };
+                p = match p.parent() {
+                    Some(parent) if target.is_relative() => parent.join(target),
+                    _ => target,
+                };
+            }
+            _ => break,
+        }
+    }
+    (!special(&p)).then_some(p)
+}
+
+/// Writes `bytes` straight into a file that is not a regular file (a
+/// terminal, `/dev/null`, `/dev/stdout`, a named pipe): it cannot be
+/// replaced by a rename, and must never be (renaming over `/dev/null`
+/// would put a plain file in its place).
+fn write_through(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    // Appending: `--csv /dev/stdout > file` adds after what was printed.
+    OpenOptions::new()
+        .append(true)
+        .open(path)
+        .and_then(|mut f| f.write_all(bytes))
+        .map_err(|e| OutputError::io(path, e))
+}
+
 /// Writes one file atomically: temporary in the same folder, fsync,
 /// rename, fsync of the folder. The folder is created if needed. On any
 /// error the old file (if any) is untouched and no temporary remains.
+///
+/// A symbolic link is followed (its target is replaced, the link kept);
+/// an existing file keeps its permissions; a device or a named pipe
+/// (`/dev/stdout`, `/dev/null`) is written through, not replaced; a folder
+/// is refused.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let (dir, name) = split(path)?;
+    let Some(target) = follow_links(path) else {
+        return write_through(path, bytes);
+    };
+    let existing = std::fs::metadata(&target).ok();
+    match &existing {
+        Some(m) if m.is_dir() => {
+            return Err(OutputError::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "it is a folder"),
+            ));
+        }
+        Some(m) if !m.is_file() => return write_through(&target, bytes),
+        _ => {}
+    }
+    let (dir, name) = split(&target)?;
     std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
     sweep_stale(&dir);
     let tmp = temp_path(&dir, &name);
     stage(&tmp, bytes).map_err(|e| stage_error(path, &dir, bytes.len() as u64, e))?;
-    if let Err(e) = std::fs::rename(&tmp, path) {
+    if let Some(m) = &existing {
+        // Best effort: a file the user made read-only for others stays so.
+        let _ = std::fs::set_permissions(&tmp, m.permissions());
+    }
+    if let Err(e) = std::fs::rename(&tmp, &target) {
         let _ = std::fs::remove_file(&tmp);
         return Err(OutputError::io(path, e));
     }
@@ -206,8 +271,25 @@ impl Report {
         } else {
             dir.to_path_buf()
         };
+        if std::fs::metadata(&dir).is_ok_and(|m| !m.is_dir()) {
+            return Err(OutputError::io(
+                &dir,
+                std::io::Error::new(
+                    std::io::ErrorKind::NotADirectory,
+                    "it exists and is not a folder",
+                ),
+            ));
+        }
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
         let abs = dir.canonicalize().map_err(|e| OutputError::io(&dir, e))?;
+        // `--out` given as a symbolic link to a folder: the switch must
+        // exchange the folder, not the link (which would be replaced by a
+        // plain folder and the link's target left with the old report).
+        let dir = if std::fs::symlink_metadata(&dir).is_ok_and(|m| m.file_type().is_symlink()) {
+            abs.clone()
+        } else {
+            dir
+        };
         sweep_stale(&dir);
         let parent = abs.parent().filter(|_| !holds_cwd(&abs));
         let base = abs.file_name().and_then(|n| n.to_str());
@@ -609,5 +691,91 @@ mod tests {
         assert!(holds_cwd(cwd.parent().unwrap()));
         let d = tempfile::tempdir().unwrap();
         assert!(!holds_cwd(&d.path().canonicalize().unwrap()));
+    }
+
+    #[test]
+    fn a_link_is_followed_and_kept() {
+        let d = tempfile::tempdir().unwrap();
+        let target = d.path().join("real.csv");
+        std::fs::write(&target, "old").unwrap();
+        let link = d.path().join("link.csv");
+        std::os::unix::fs::symlink("real.csv", &link).unwrap();
+        write_file(&link, b"new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+        assert_eq!(names(d.path()), ["link.csv", "real.csv"]);
+    }
+
+    #[test]
+    fn permissions_of_the_replaced_file_are_kept() {
+        use std::os::unix::fs::PermissionsExt;
+        let d = tempfile::tempdir().unwrap();
+        let f = d.path().join("a.json");
+        std::fs::write(&f, "old").unwrap();
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
+        write_file(&f, b"new").unwrap();
+        let mode = std::fs::metadata(&f).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o600);
+    }
+
+    #[test]
+    fn a_named_pipe_is_written_through_not_replaced() {
+        let d = tempfile::tempdir().unwrap();
+        let fifo = d.path().join("pipe");
+        rustix::fs::mknodat(
+            rustix::fs::CWD,
+            &fifo,
+            rustix::fs::FileType::Fifo,
+            rustix::fs::Mode::from_raw_mode(0o600),
+            0,
+        )
+        .unwrap();
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).unwrap())
+        };
+        write_file(&fifo, b"through the pipe").unwrap();
+        assert_eq!(reader.join().unwrap(), b"through the pipe");
+        let ft = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+        assert!(std::os::unix::fs::FileTypeExt::is_fifo(&ft));
+        assert_eq!(names(d.path()), ["pipe"]);
+    }
+
+    #[test]
+    fn a_folder_is_not_a_file_and_a_file_is_not_a_folder() {
+        let d = tempfile::tempdir().unwrap();
+        let e = write_file(d.path(), b"x").unwrap_err().to_string();
+        assert!(e.contains("is a folder"), "{e}");
+        let f = d.path().join("plain");
+        std::fs::write(&f, "mine").unwrap();
+        let e = Report::new_in(&f).unwrap_err().to_string();
+        assert!(e.contains("not a folder") && e.contains("plain"), "{e}");
+        assert_eq!(std::fs::read_to_string(&f).unwrap(), "mine");
+    }
+
+    #[test]
+    fn a_report_into_a_linked_folder_keeps_the_link() {
+        let d = tempfile::tempdir().unwrap();
+        let real = d.path().join("real");
+        std::fs::create_dir(&real).unwrap();
+        std::fs::write(real.join("old.txt"), "keep").unwrap();
+        let link = d.path().join("out");
+        std::os::unix::fs::symlink("real", &link).unwrap();
+        let mut r = Report::new_in(&link).unwrap();
+        r.add("a.json", b"{}").unwrap();
+        r.commit().unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(names(&real), ["a.json", "old.txt"]);
+        assert_eq!(names(d.path()), ["out", "real"]);
     }
 }
