@@ -26,9 +26,40 @@ pub fn fmt_num(x: f64) -> String {
     }
 }
 
+/// A number as Rust prints it (`0.00002`, `1200`, `0.1`: the way a value
+/// the user typed reads back), unless that takes more than 24 characters
+/// (5e-324 prints 324 digits), then as [`fmt_num`] does.
+pub fn plain(x: f64) -> String {
+    let s = format!("{x}");
+    if s.len() > 24 { fmt_num(x) } else { s }
+}
+
+/// A TOML value as a message quotes it: numbers as [`plain`] writes them
+/// (the TOML form of 1e-300 is 300 digits long), strings as written.
+pub fn toml_value(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) => plain(*f),
+        toml::Value::Array(a) => format!(
+            "[{}]",
+            a.iter().map(toml_value).collect::<Vec<_>>().join(", ")
+        ),
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plain_numbers_stay_plain_until_they_grow_long() {
+        assert_eq!(plain(0.00002), "0.00002");
+        assert_eq!(plain(1200.0), "1200");
+        assert_eq!(plain(5e-324), "4.94066e-324");
+        assert_eq!(plain(1e300), "1e300");
+        assert_eq!(plain(-1e-300), "-1e-300");
+    }
 
     #[test]
     fn numbers_read_as_a_person_writes_them() {

@@ -36,6 +36,7 @@ pub mod batch;
 pub mod cli;
 pub mod engine;
 pub mod fmt;
+pub mod input;
 pub mod methods;
 pub mod model;
 pub mod output;

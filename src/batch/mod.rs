@@ -9,6 +9,7 @@
 //! - [`figure`]: reads a figure of a view model by a dotted path.
 
 pub mod export_path;
+pub mod report;
 pub mod script;
 
 use crate::panes::{self, PaneId, PaneState, PaneView, Session};

@@ -95,7 +95,7 @@ impl ParamArgs {
         }
         let mut p = match &self.params {
             Some(path) => {
-                let text = std::fs::read_to_string(path)
+                let text = crate::input::read_text(path)
                     .with_context(|| format!("reading parameter file {}", path.display()))?;
                 let table: toml::Table = text
                     .parse()
@@ -228,9 +228,10 @@ pub mod bounds {
     pub fn calibrate_revs(s: &str) -> Result<usize, String> {
         count(s, "simulated revolutions", 8, 10_000)
     }
-    /// Reported revolutions of a simulation (fractional).
+    /// Reported revolutions of a simulation (fractional): at least a
+    /// thousandth (0.36° of crank), below which no figure is defined.
     pub fn revs(s: &str) -> Result<f64, String> {
-        in_range(s, "revolutions", 0.0, 10_000.0, true)
+        in_range(s, "revolutions", 1e-3, 10_000.0, false)
     }
     /// Warm-up revolutions (fractional, 0 allowed).
     pub fn warmup(s: &str) -> Result<f64, String> {

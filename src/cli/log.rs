@@ -107,6 +107,10 @@ fn opt<T: std::fmt::Display>(v: &Option<T>) -> String {
     v.as_ref().map_or("—".into(), |x| x.to_string())
 }
 
+fn opt_num(v: Option<f64>) -> String {
+    v.map_or("—".into(), crate::fmt::plain)
+}
+
 fn source_name(s: ValueSource) -> &'static str {
     match s {
         ValueSource::Override => "override",
@@ -196,17 +200,23 @@ pub fn render_text(s: &LogSummary, all_cycles: bool) -> String {
             opt(&m.rig_id),
             opt(&m.part_number),
             opt(&m.lot),
-            opt(&m.clearance_mm),
+            opt_num(m.clearance_mm),
             opt(&m.material),
-            opt(&m.motor_rpm),
-            opt(&m.gear_ratio),
-            opt(&m.standoff_mm),
-            m.laser_zero_mm
-                .map_or(String::new(), |v| format!(", laser zero {v} mm")),
-            m.force_tare_n
-                .map_or(String::new(), |v| format!(", force tare {v} N")),
-            m.angle_offset_rad
-                .map_or(String::new(), |v| format!(", angle offset {v} rad")),
+            opt_num(m.motor_rpm),
+            opt_num(m.gear_ratio),
+            opt_num(m.standoff_mm),
+            m.laser_zero_mm.map_or(String::new(), |v| format!(
+                ", laser zero {} mm",
+                crate::fmt::plain(v)
+            )),
+            m.force_tare_n.map_or(String::new(), |v| format!(
+                ", force tare {} N",
+                crate::fmt::plain(v)
+            )),
+            m.angle_offset_rad.map_or(String::new(), |v| format!(
+                ", angle offset {} rad",
+                crate::fmt::plain(v)
+            )),
         );
         let extra: BTreeMap<&String, &String> = m
             .raw
@@ -316,8 +326,10 @@ pub fn render_text(s: &LogSummary, all_cycles: bool) -> String {
                 k.motor_rpm_cycle_min,
                 k.motor_rpm_cycle_max,
                 k.speed_spread_rel * 100.0,
-                k.motor_rpm_setpoint
-                    .map_or(String::new(), |v| format!("; set-point {v} rpm"))
+                k.motor_rpm_setpoint.map_or(String::new(), |v| format!(
+                    "; set-point {} rpm",
+                    crate::fmt::plain(v)
+                ))
             );
             let _ = writeln!(
                 o,
@@ -329,7 +341,7 @@ pub fn render_text(s: &LogSummary, all_cycles: bool) -> String {
                 },
                 k.encoder_counts
                     .map_or(String::new(), |n| format!(", encoder {n} counts/rev")),
-                cs.standoff_mm,
+                crate::fmt::plain(cs.standoff_mm),
                 source_name(cs.standoff_source)
             );
         }

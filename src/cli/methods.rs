@@ -46,7 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 fn run_dynamics(args: &Args, effort: Effort) -> anyhow::Result<ExitCode> {
     let custom = match &args.scenes {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
+            let text = crate::input::read_text(path)
                 .with_context(|| format!("reading {}", path.display()))?;
             Some(
                 scenes_from_toml(&text)

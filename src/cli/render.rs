@@ -66,7 +66,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut session = super::tui::build_session(&args.inputs, &args.params, args.level.as_deref())?;
     session.display = Some("headless render (16 colours; images: half-blocks)".into());
     if let Some(g) = &args.grid {
-        let text = std::fs::read_to_string(g)
+        let text = crate::input::read_text(g)
             .map_err(|e| anyhow::anyhow!("reading grid file {}: {e}", g.display()))?;
         session.study_setup.grid = crate::sim::sweep::SweepGrid::from_toml_str(&text)
             .map_err(|e| anyhow::anyhow!("grid file {}: {e}", g.display()))?;

@@ -245,7 +245,9 @@ fn write_text<W: Write>(
     writeln!(
         out,
         "window: {} warm-up + {} reported revolutions — {}",
-        opts.warmup, opts.revs, s.view
+        crate::fmt::plain(opts.warmup),
+        crate::fmt::plain(opts.revs),
+        s.view
     )?;
     if s.view == "single realisation" {
         writeln!(

@@ -55,7 +55,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let base = args.params.resolve()?;
     let mut grid = match &args.grid {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
+            let text = crate::input::read_text(path)
                 .with_context(|| format!("reading grid file {}", path.display()))?;
             SweepGrid::from_toml_str(&text)
                 .map_err(|e| anyhow!("grid file {}: {e}", path.display()))?
@@ -133,14 +133,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             grid.materials.len(),
             result.method,
             result.rtol,
-            result.warmup_revs,
-            result.revs
+            crate::fmt::plain(result.warmup_revs),
+            crate::fmt::plain(result.revs)
         )?;
         writeln!(
             out,
             "nominal: c = {} mm, {} rpm, {}; wall {:.0} ms; {} failed",
-            result.nominal.clearance_mm,
-            result.nominal.motor_rpm,
+            crate::fmt::plain(result.nominal.clearance_mm),
+            crate::fmt::plain(result.nominal.motor_rpm),
             result.nominal.material,
             result.wall_ms,
             result.failed

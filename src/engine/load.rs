@@ -96,7 +96,7 @@ fn load_file(path: &Path, progress: &Progress) -> Vec<Loaded> {
         "mcap" => load_log(path, progress),
         e if IMAGE_EXTS.contains(&e) => {
             let source = ImageSource::File(path.to_path_buf());
-            match std::fs::read(path) {
+            match crate::input::read_bounded(path, crate::input::IMAGE_MAX_BYTES) {
                 Ok(bytes) => vec![load_image_bytes(&shown, source, &bytes)],
                 Err(e) => vec![failed_image(
                     &shown,
@@ -106,7 +106,7 @@ fn load_file(path: &Path, progress: &Progress) -> Vec<Loaded> {
                 )],
             }
         }
-        "toml" => match std::fs::read_to_string(path) {
+        "toml" => match crate::input::read_text(path) {
             Ok(text) => vec![load_toml_text(&shown, &text)],
             Err(e) => vec![Loaded::Entry(entry(
                 &shown,

@@ -1,12 +1,15 @@
 //! Mechanism model: parameters, presets, kinematics, kinetostatics, contact, clearance ODE.
 
+pub mod choices;
 pub mod clearance;
 
 pub mod contact;
 pub mod kinematics;
 pub mod kinetostatics;
 pub mod materials;
+pub mod param_error;
 pub mod param_table;
+pub mod param_value;
 pub mod params;
 pub mod table;
 

@@ -12,87 +12,13 @@ pub use super::param_table::{PARAM_SPECS, ParamSpec, physical_range, spec, withi
 use super::table::Table;
 pub use crate::fmt::fmt_num;
 use serde::{Deserialize, Serialize};
-use std::fmt;
 use std::path::Path;
 
-/// Contact force model of the clearance joint (model.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ContactModel {
-    LankaraniNikravesh,
-    Flores,
-    HuntCrossley,
-    Hertz,
-}
-
-impl ContactModel {
-    pub const ALL: [ContactModel; 4] = [
-        ContactModel::LankaraniNikravesh,
-        ContactModel::Flores,
-        ContactModel::HuntCrossley,
-        ContactModel::Hertz,
-    ];
-    pub fn name(self) -> &'static str {
-        match self {
-            ContactModel::LankaraniNikravesh => "lankarani_nikravesh",
-            ContactModel::Flores => "flores",
-            ContactModel::HuntCrossley => "hunt_crossley",
-            ContactModel::Hertz => "hertz",
-        }
-    }
-    pub fn parse(s: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == s.trim())
-    }
-    /// Hysteresis factor D for restitution `ce` (model.md).
-    pub fn damping_factor(self, ce: f64) -> f64 {
-        match self {
-            ContactModel::LankaraniNikravesh => 3.0 * (1.0 - ce * ce) / 4.0,
-            ContactModel::Flores => 8.0 * (1.0 - ce) / (5.0 * ce),
-            ContactModel::HuntCrossley => 3.0 * (1.0 - ce) / 2.0,
-            ContactModel::Hertz => 0.0,
-        }
-    }
-}
-
-/// How the process load acts around v4 = 0 (model.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ProcessLaw {
-    /// Smoothed like friction with the c_d ramp (default).
-    Regularized,
-    /// Set-valued stick law (optional refinement; not implemented yet).
-    Stick,
-}
-
-impl ProcessLaw {
-    pub fn name(self) -> &'static str {
-        match self {
-            ProcessLaw::Regularized => "regularized",
-            ProcessLaw::Stick => "stick",
-        }
-    }
-}
-
-/// How the crank is driven.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Driver {
-    /// θ2 = θ0 + ω t (default).
-    ConstantSpeed,
-    /// A motor with torque–speed curve and flywheel (the `motor` level; not
-    /// implemented yet — the driver is a parameter so the level can be added
-    /// without changing the file format).
-    Motor,
-}
-
-impl Driver {
-    pub fn name(self) -> &'static str {
-        match self {
-            Driver::ConstantSpeed => "constant_speed",
-            Driver::Motor => "motor",
-        }
-    }
-}
+pub use super::choices::{ContactModel, Driver, ProcessLaw};
+pub use super::param_error::ParamError;
+use super::param_value::pairs;
+pub use super::param_value::{ParamValue, parse_value_text};
+use crate::fmt::toml_value as show;
 
 /// All parameters of the mechanism, in SI units.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -262,7 +188,7 @@ impl Params {
     /// Loads a parameter file: its `preset` (default `paper`) is the base,
     /// then every other key in the file applies (material before E/ν).
     pub fn from_toml_file(path: &Path) -> Result<Self, ParamError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ParamError::File {
+        let text = crate::input::read_text(path).map_err(|e| ParamError::File {
             file: path.display().to_string(),
             msg: e.to_string(),
         })?;
@@ -282,7 +208,7 @@ impl Params {
             Some(v) => {
                 return Err(ParamError::Invalid {
                     key: "preset".into(),
-                    value: v.to_string(),
+                    value: show(v),
                     allowed: format!("a string, one of {}", PRESETS.join(", ")),
                 });
             }
@@ -344,11 +270,10 @@ impl Params {
             let x = match value {
                 toml::Value::Float(f) => *f,
                 toml::Value::Integer(i) => *i as f64,
-                toml::Value::String(s) => s
-                    .trim()
-                    .parse::<f64>()
-                    .map_err(|_| invalid(value.to_string()))?,
-                other => return Err(invalid(other.to_string())),
+                toml::Value::String(s) => {
+                    s.trim().parse::<f64>().map_err(|_| invalid(show(value)))?
+                }
+                other => return Err(invalid(show(other))),
             };
             if !x.is_finite() {
                 return Err(invalid(x.to_string()));
@@ -365,7 +290,7 @@ impl Params {
         let text = || -> Result<String, ParamError> {
             match value {
                 toml::Value::String(s) => Ok(s.trim().to_string()),
-                other => Err(invalid(other.to_string())),
+                other => Err(invalid(show(other))),
             }
         };
         let check = |x: f64, ok: bool| -> Result<f64, ParamError> {
@@ -418,17 +343,15 @@ impl Params {
                 self.clearance = check(x, x >= 0.0)? / 1e3
             }
             "material" => {
-                let m = Material::by_name(&text()?).ok_or_else(|| invalid(value.to_string()))?;
+                let m = Material::by_name(&text()?).ok_or_else(|| invalid(show(value)))?;
                 self.journal = m.clone();
                 self.bearing = m;
             }
             "journal_material" => {
-                self.journal =
-                    Material::by_name(&text()?).ok_or_else(|| invalid(value.to_string()))?
+                self.journal = Material::by_name(&text()?).ok_or_else(|| invalid(show(value)))?
             }
             "bearing_material" => {
-                self.bearing =
-                    Material::by_name(&text()?).ok_or_else(|| invalid(value.to_string()))?
+                self.bearing = Material::by_name(&text()?).ok_or_else(|| invalid(show(value)))?
             }
             "journal_e_gpa" => {
                 let x = num()?;
@@ -452,7 +375,7 @@ impl Params {
             }
             "contact_model" => {
                 self.contact_model =
-                    ContactModel::parse(&text()?).ok_or_else(|| invalid(value.to_string()))?
+                    ContactModel::parse(&text()?).ok_or_else(|| invalid(show(value)))?
             }
             "restitution" => {
                 let x = num()?;
@@ -491,7 +414,7 @@ impl Params {
                 self.standoff = check(x, x >= 0.0)? / 1e3
             }
             "f_ins_table" | "f_wd_table" => {
-                let pts = pairs(value).ok_or_else(|| invalid(value.to_string()))?;
+                let pts = pairs(value).ok_or_else(|| invalid(show(value)))?;
                 // Physical range: depths within 1000 mm, forces within 1 MN.
                 if let Some(&(d, f)) = pts
                     .iter()
@@ -501,7 +424,7 @@ impl Params {
                 }
                 let t = Table::from_mm(&pts).map_err(|msg| ParamError::Invalid {
                     key: key.to_string(),
-                    value: format!("{value} ({msg})"),
+                    value: format!("{} ({msg})", show(value)),
                     allowed: spec.range.to_string(),
                 })?;
                 if key == "f_ins_table" {
@@ -514,7 +437,7 @@ impl Params {
                 self.process_law = match text()?.as_str() {
                     "regularized" => ProcessLaw::Regularized,
                     "stick" => ProcessLaw::Stick,
-                    _ => return Err(invalid(value.to_string())),
+                    _ => return Err(invalid(show(value))),
                 }
             }
             "gravity_mps2" => {
@@ -525,12 +448,12 @@ impl Params {
                             g[i] = match x {
                                 toml::Value::Float(f) if f.abs() <= 1000.0 => *f,
                                 toml::Value::Integer(n) if n.abs() <= 1000 => *n as f64,
-                                _ => return Err(invalid(value.to_string())),
+                                _ => return Err(invalid(show(value))),
                             };
                         }
                         g
                     }
-                    _ => return Err(invalid(value.to_string())),
+                    _ => return Err(invalid(show(value))),
                 };
                 self.gravity = v
             }
@@ -538,7 +461,7 @@ impl Params {
                 self.driver = match text()?.as_str() {
                     "constant_speed" => Driver::ConstantSpeed,
                     "motor" => Driver::Motor,
-                    _ => return Err(invalid(value.to_string())),
+                    _ => return Err(invalid(show(value))),
                 }
             }
             _ => return Err(ParamError::unknown(key)),
@@ -678,168 +601,6 @@ impl Params {
             .filter_map(|s| self.get(s.key).map(|v| (s, v)))
             .collect()
     }
-}
-
-/// Parses the text of a `--set` value: TOML value syntax, or a bare word as a string.
-pub fn parse_value_text(text: &str) -> toml::Value {
-    // TOML reads 0x10 as 16, 0o10 as 8 and 0b10 as 2: a parameter typed on
-    // the command line means a decimal number, so those stay text (and are
-    // refused with the key's range).
-    let digits = text.trim().trim_start_matches(['+', '-']);
-    if ["0x", "0o", "0b", "0X", "0O", "0B"]
-        .iter()
-        .any(|p| digits.starts_with(p))
-    {
-        return toml::Value::String(text.to_string());
-    }
-    let doc = format!("v = {text}");
-    match doc.parse::<toml::Table>() {
-        Ok(mut t) => t
-            .remove("v")
-            .unwrap_or_else(|| toml::Value::String(text.to_string())),
-        Err(_) => toml::Value::String(text.to_string()),
-    }
-}
-
-fn pairs(value: &toml::Value) -> Option<Vec<(f64, f64)>> {
-    let num = |v: &toml::Value| match v {
-        toml::Value::Float(f) => Some(*f),
-        toml::Value::Integer(i) => Some(*i as f64),
-        _ => None,
-    };
-    match value {
-        toml::Value::Array(rows) => rows
-            .iter()
-            .map(|row| match row {
-                toml::Value::Array(p) if p.len() == 2 => Some((num(&p[0])?, num(&p[1])?)),
-                _ => None,
-            })
-            .collect(),
-        _ => None,
-    }
-}
-
-/// A parameter value in user units.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum ParamValue {
-    Number(f64),
-    Text(String),
-    Pairs(Vec<(f64, f64)>),
-    Vector(Vec<f64>),
-}
-
-impl ParamValue {
-    pub fn to_toml(&self) -> toml::Value {
-        match self {
-            ParamValue::Number(x) => toml::Value::Float(*x),
-            ParamValue::Text(s) => toml::Value::String(s.clone()),
-            ParamValue::Pairs(p) => toml::Value::Array(
-                p.iter()
-                    .map(|(a, b)| {
-                        toml::Value::Array(vec![toml::Value::Float(*a), toml::Value::Float(*b)])
-                    })
-                    .collect(),
-            ),
-            ParamValue::Vector(v) => {
-                toml::Value::Array(v.iter().map(|x| toml::Value::Float(*x)).collect())
-            }
-        }
-    }
-}
-
-impl fmt::Display for ParamValue {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ParamValue::Number(x) => write!(f, "{x}"),
-            ParamValue::Text(s) => write!(f, "{s}"),
-            ParamValue::Pairs(p) => {
-                let items: Vec<String> = p.iter().map(|(a, b)| format!("[{a}, {b}]")).collect();
-                write!(f, "[{}]", items.join(", "))
-            }
-            ParamValue::Vector(v) => {
-                let items: Vec<String> = v.iter().map(|a| format!("{a}")).collect();
-                write!(f, "[{}]", items.join(", "))
-            }
-        }
-    }
-}
-
-/// Errors in parameters: each names the key and the allowed range.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ParamError {
-    #[error("unknown parameter `{key}`{}", suggestion.as_ref().map(|s| format!(" (did you mean `{s}`?)")).unwrap_or_default())]
-    UnknownKey {
-        key: String,
-        suggestion: Option<String>,
-    },
-    #[error("invalid value for `{key}`: {value} (allowed: {allowed})")]
-    Invalid {
-        key: String,
-        value: String,
-        allowed: String,
-    },
-    #[error("inconsistent parameters ({keys}): {msg}")]
-    Relation { keys: String, msg: String },
-    #[error("`{text}` is not of the form key=value")]
-    Syntax { text: String },
-    #[error("parameter file {file}: {msg}")]
-    File { file: String, msg: String },
-    #[error("parameter file {file}: {inner}")]
-    InFile {
-        file: String,
-        inner: Box<ParamError>,
-    },
-}
-
-impl ParamError {
-    fn unknown(key: &str) -> Self {
-        let suggestion = PARAM_SPECS
-            .iter()
-            .map(|s| (edit_distance(key, s.key), s.key))
-            .filter(|(d, _)| *d <= 3)
-            .min()
-            .map(|(_, k)| k.to_string())
-            .or_else(|| {
-                // A key without its unit suffix (`clearance` for `clearance_mm`).
-                PARAM_SPECS
-                    .iter()
-                    .find(|s| s.key.starts_with(key) && key.len() >= 2)
-                    .map(|s| s.key.to_string())
-            });
-        ParamError::UnknownKey {
-            key: key.to_string(),
-            suggestion,
-        }
-    }
-
-    fn in_file(self, path: &Path) -> Self {
-        match self {
-            ParamError::File { msg, .. } => ParamError::File {
-                file: path.display().to_string(),
-                msg,
-            },
-            other => ParamError::InFile {
-                file: path.display().to_string(),
-                inner: Box::new(other),
-            },
-        }
-    }
-}
-
-fn edit_distance(a: &str, b: &str) -> usize {
-    let a: Vec<char> = a.chars().collect();
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for i in 1..=a.len() {
-        let mut cur = vec![i; b.len() + 1];
-        for j in 1..=b.len() {
-            let sub = prev[j - 1] + usize::from(a[i - 1] != b[j - 1]);
-            cur[j] = sub.min(prev[j] + 1).min(cur[j - 1] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
 }
 
 #[cfg(test)]

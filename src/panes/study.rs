@@ -230,7 +230,9 @@ pub fn view(s: &Session, ui: &PaneState) -> StudyView {
         ran: true,
         nominal: Some(format!(
             "nominal: c = {} mm, {} rpm, {}",
-            r.nominal.clearance_mm, r.nominal.motor_rpm, r.nominal.material
+            crate::fmt::plain(r.nominal.clearance_mm),
+            crate::fmt::plain(r.nominal.motor_rpm),
+            r.nominal.material
         )),
         curves,
         bars,

@@ -227,7 +227,7 @@ impl ChannelMap {
     /// Reads a map from a TOML file (a map file or a session file with `[channels]`).
     pub fn from_file(path: &std::path::Path) -> Result<Self, LogError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| LogError::ChannelMap {
+        let text = crate::input::read_text(path).map_err(|e| LogError::ChannelMap {
             source_name: name.clone(),
             message: format!("cannot read: {e}"),
         })?;

@@ -1278,7 +1278,7 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
                         &file,
                         Some(&label),
                         None,
-                        format!("metadata laser_zero_mm = {v} mm disagrees with the estimate {est_text}; the metadata value is used"),
+                        format!("metadata laser_zero_mm = {} mm disagrees with the estimate {est_text}; the metadata value is used", crate::fmt::plain(v)),
                     ));
                 }
             }
@@ -1368,7 +1368,7 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
                         &file,
                         Some(&label),
                         None,
-                        format!("metadata force_tare_n = {v} N disagrees with the off-part reading {est_text}; the metadata value is used"),
+                        format!("metadata force_tare_n = {} N disagrees with the off-part reading {est_text}; the metadata value is used", crate::fmt::plain(v)),
                     ));
                 }
             }

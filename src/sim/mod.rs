@@ -135,31 +135,34 @@ impl SimOptions {
     }
 
     pub fn validate(&self) -> Result<(), SimError> {
+        use crate::fmt::fmt_num;
         let bad = |what: &str, v: String, allowed: &str| {
             Err(SimError::Options(format!(
                 "invalid {what}: {v} (allowed: {allowed})"
             )))
         };
         if !(self.rtol > 0.0 && self.rtol < 1.0) {
-            return bad("rtol", self.rtol.to_string(), "0 < rtol < 1");
+            return bad("rtol", fmt_num(self.rtol), "0 < rtol < 1");
         }
         if !(self.atol >= 0.0) || !self.atol.is_finite() {
-            return bad("atol", self.atol.to_string(), "≥ 0");
+            return bad("atol", fmt_num(self.atol), "≥ 0");
         }
         if let Some(h) = self.step {
             if !(h > 0.0) || !h.is_finite() {
-                return bad("step", h.to_string(), "> 0 s");
+                return bad("step", fmt_num(h), "> 0 s");
             }
         }
         if !(self.warmup >= 0.0) || !self.warmup.is_finite() {
-            return bad("warmup", self.warmup.to_string(), "≥ 0 revolutions");
+            return bad("warmup", fmt_num(self.warmup), "≥ 0 revolutions");
         }
-        if !(self.revs > 0.0) || !self.revs.is_finite() || self.revs > 1e6 {
-            return bad("revs", self.revs.to_string(), "0 < revs ≤ 1e6 revolutions");
+        // Below a thousandth of a revolution (0.36° of crank) no figure of
+        // the summary is defined.
+        if !(self.revs >= 1e-3) || !self.revs.is_finite() || self.revs > 1e6 {
+            return bad("revs", fmt_num(self.revs), "1e-3 ≤ revs ≤ 1e6 revolutions");
         }
         if let Some(g) = self.grid_deg {
             if !(g > 0.0) || g > 360.0 {
-                return bad("grid", g.to_string(), "0 < grid ≤ 360 degrees");
+                return bad("grid", fmt_num(g), "0 < grid ≤ 360 degrees");
             }
             let n = self.revs * 360.0 / g;
             if n > 5e7 {
@@ -169,7 +172,7 @@ impl SimOptions {
         if !(self.event_tol > 0.0 && self.event_tol <= 1e-5) {
             return bad(
                 "event_tol",
-                self.event_tol.to_string(),
+                crate::fmt::fmt_num(self.event_tol),
                 "0 < event_tol ≤ 1e-5 (relative to c)",
             );
         }

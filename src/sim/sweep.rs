@@ -87,14 +87,30 @@ impl SweepGrid {
         {
             return Err("every factor needs at least one level".into());
         }
+        // The grid's levels hold the parameters' own physical ranges, so a
+        // sweep refuses what `--set` refuses (and names it readably).
+        use crate::fmt::fmt_num;
+        use crate::model::param_table::{physical_range, within};
+        let (c_lo, c_hi) = physical_range("clearance_mm").unwrap_or((1e-4, 10.0));
         for &c in &self.clearances_mm {
-            if !(c >= 0.0) || !c.is_finite() {
-                return Err(format!("clearance {c} mm: allowed ≥ 0"));
+            if !(c == 0.0 || within(c, c_lo, c_hi)) {
+                return Err(format!(
+                    "clearance {} mm: allowed 0 (the ideal joint) or {} … {} mm",
+                    fmt_num(c),
+                    fmt_num(c_lo),
+                    fmt_num(c_hi)
+                ));
             }
         }
+        let (s_lo, s_hi) = physical_range("motor_rpm").unwrap_or((1e-9, 6e4));
         for &s in &self.speeds_rpm {
-            if !(s > 0.0) || !s.is_finite() {
-                return Err(format!("speed {s} rpm: allowed > 0"));
+            if !within(s, s_lo, s_hi) {
+                return Err(format!(
+                    "speed {} rpm: allowed {} … {} rpm",
+                    fmt_num(s),
+                    fmt_num(s_lo),
+                    fmt_num(s_hi)
+                ));
             }
         }
         for m in &self.materials {

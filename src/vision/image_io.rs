@@ -20,7 +20,8 @@ pub const MIN_SIDE: u32 = 16;
 
 /// Reads and decodes an image file.
 pub fn load_path(path: &Path) -> Result<(Gray, ImageInfo), VisionError> {
-    let bytes = std::fs::read(path).map_err(|e| VisionError::Io(e.to_string()))?;
+    let bytes = crate::input::read_bounded(path, crate::input::IMAGE_MAX_BYTES)
+        .map_err(|e| VisionError::Io(e.to_string()))?;
     decode_bytes(&bytes)
 }
 

@@ -136,7 +136,7 @@ impl Recipe {
     /// Reads and validates a recipe file.
     pub fn load(path: &Path) -> Result<Recipe, RecipeError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| RecipeError {
+        let text = crate::input::read_text(path).map_err(|e| RecipeError {
             source_name: name.clone(),
             msg: format!("cannot read file: {e}"),
         })?;
