@@ -18,8 +18,8 @@
 //!   strings over the characters numbers are made of. `PINSIGHT_FUZZ_SEED`
 //!   replays a run.
 //!
-//! Each child runs with a data-size limit (`RLIMIT_DATA`, 2 GiB) and a wall
-//! deadline (60 s); reaching either is a failure, as is any exit other than
+//! Each child runs with a data-size limit (`RLIMIT_DATA`, 2 GiB), a model
+//! budget (`PINSIGHT_MAX_WALL_S=20`) and a wall deadline (60 s); reaching either is a failure, as is any exit other than
 //! 0–3 (result, result with findings, error, items in error), any panic text, a message without "error", or a number printed
 //! with more than 30 digits.
 
@@ -318,7 +318,11 @@ fn run(args: &[String], cwd: &Path) -> Outcome {
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
-        .env("NO_COLOR", "1");
+        .env("NO_COLOR", "1")
+        // Valid but expensive values (10000 warm-up revolutions, 1e-4 rpm)
+        // are bounded by the process's model budget, well inside the
+        // deadline: they must end with a result or "work budget exceeded".
+        .env("PINSIGHT_MAX_WALL_S", "20");
     for v in [
         "PINSIGHT_SHARD",
         "PINSIGHT_SHARDS",
@@ -377,8 +381,16 @@ fn run(args: &[String], cwd: &Path) -> Outcome {
     }
 }
 
-/// What is wrong with an outcome, if anything.
-fn judge(o: &Outcome) -> Option<String> {
+/// The longest run of digits in a text.
+fn longest_digits(t: &str) -> usize {
+    t.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
+}
+
+/// What is wrong with an outcome of the command line `args`, if anything.
+fn judge(o: &Outcome, args: &[String]) -> Option<String> {
     if o.timed_out {
         return Some(format!("no end within {} s", DEADLINE.as_secs()));
     }
@@ -394,7 +406,12 @@ fn judge(o: &Outcome) -> Option<String> {
     }
     // An allocation refused at the data limit surfaces as a panic, an
     // abort, or an I/O error "out of memory": each is a blow-up.
-    for bad in ["panicked", "RUST_BACKTRACE", "memory allocation", "out of memory"] {
+    for bad in [
+        "panicked",
+        "RUST_BACKTRACE",
+        "memory allocation",
+        "out of memory",
+    ] {
         if o.stderr.contains(bad) {
             return Some(format!("stderr says `{bad}`"));
         }
@@ -402,13 +419,10 @@ fn judge(o: &Outcome) -> Option<String> {
     if o.code == Some(2) && !o.stderr.to_lowercase().contains("error") {
         return Some("exit 2 without an error message".into());
     }
-    let longest_digits = |t: &str| {
-        t.split(|c: char| !c.is_ascii_digit())
-            .map(str::len)
-            .max()
-            .unwrap_or(0)
-    };
-    if longest_digits(&o.stderr) > 30 || longest_digits(&o.stdout) > 30 {
+    // Quoting what the user typed is fine; expanding a number is not.
+    let typed = args.iter().map(|a| longest_digits(a)).max().unwrap_or(0);
+    let limit = typed.max(30);
+    if longest_digits(&o.stderr) > limit || longest_digits(&o.stdout) > limit {
         return Some("a number printed with more than 30 digits".into());
     }
     None
@@ -453,7 +467,7 @@ fn fuzz(cases: Vec<(Target, String, Option<String>)>, sandbox: &Path, tally: &Mu
                     if o.elapsed > tl.slowest.0 {
                         tl.slowest = (o.elapsed, line.clone());
                     }
-                    if let Some(why) = judge(&o) {
+                    if let Some(why) = judge(&o, &args) {
                         let tail: String = o.stderr.chars().take(400).collect();
                         tl.failures
                             .push(format!("{why}: {line}\n    stderr: {tail}"));

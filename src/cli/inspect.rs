@@ -195,10 +195,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             write!(out, "{}", text_report(r))?;
         }
     }
+    // Overlays are staged as they are drawn (not held in memory) and
+    // replace an older set, with inspection.json, only when all are written.
+    let mut report = match &args.out {
+        Some(dir) => Some(crate::output::Report::new_in(dir)?),
+        None => None,
+    };
     let mut used_names = std::collections::HashSet::new();
     for item in &items {
         let (r, gray) = batch::inspect_item(item, &book, &opts, args.out.is_some());
-        if let (Some(dir), Some(g), Some(ins)) = (&args.out, gray.as_ref(), r.inspection.as_ref()) {
+        if let (Some(rep), Some(g), Some(ins)) =
+            (report.as_mut(), gray.as_ref(), r.inspection.as_ref())
+        {
             let img = draw_overlay(g, ins, &ov);
             // Two inputs with the same stem (a/x.png, b/x.png, x.jpg) must
             // not overwrite each other's overlay.
@@ -211,11 +219,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 );
                 k += 1;
             }
-            let path = dir.join(name);
             let mut png = std::io::Cursor::new(Vec::new());
             img.write_to(&mut png, image::ImageFormat::Png)
-                .with_context(|| format!("cannot encode {}", path.display()))?;
-            crate::output::write_file(&path, png.get_ref())?;
+                .with_context(|| format!("cannot encode {name}"))?;
+            rep.add(&name, png.get_ref())?;
         }
         if !args.json {
             write!(out, "{}", text_report(&r))?;
@@ -226,9 +233,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         serde_json::to_writer_pretty(&mut out, &results)?;
         writeln!(out)?;
     }
-    if let Some(dir) = &args.out {
-        let p = dir.join("inspection.json");
-        crate::output::write_file(&p, &serde_json::to_vec_pretty(&results)?)?;
+    if let Some(mut rep) = report {
+        rep.add("inspection.json", &serde_json::to_vec_pretty(&results)?)?;
+        rep.commit()?;
     }
     let errors = results
         .iter()

@@ -3,7 +3,8 @@
 use crate::cli::common::outln;
 use crate::methods::Effort;
 use crate::methods::dynamics::{DynamicsLab, run_dynamics_lab, scenes_from_toml};
-use crate::plot::write_png;
+use crate::output::Report;
+use crate::plot::render_png;
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::lab::{LabMode, VisionLab, lab_panels, run_lab};
 use anyhow::{Context, anyhow, bail};
@@ -55,45 +56,32 @@ fn run_dynamics(args: &Args, effort: Effort) -> anyhow::Result<ExitCode> {
         }
         None => None,
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    // Staged: the tables and charts replace an older set only when all
+    // are written.
+    let mut report = Report::new_in(&args.out)?;
     let progress = Progress::new(1);
     let lab = {
         let _bar = ProgressBarGuard::start(progress.clone(), "methods");
         run_dynamics_lab(effort, custom, &progress)
     };
     let json = serde_json::to_string_pretty(&lab)?;
-    let path = args.out.join("dynamics.json");
-    crate::output::write_file(&path, json.as_bytes())?;
-    write_tables(&args.out, &lab)?;
-    write_png(
-        &args.out.join("work_precision.png"),
-        &lab.work_precision_panels(),
-        2,
-        1500,
-        1200,
-    )?;
-    write_png(
-        &args.out.join("stability.png"),
-        &lab.stability_panels(),
-        1,
-        1100,
-        750,
-    )?;
-    write_png(
-        &args.out.join("long_run.png"),
-        &lab.long_run_panels(),
-        2,
-        1500,
-        600,
-    )?;
-    write_png(
-        &args.out.join("step_budget.png"),
-        &lab.budget_panels(),
-        1,
-        1400,
-        600,
-    )?;
+    report.add("dynamics.json", json.as_bytes())?;
+    write_tables(&mut report, &lab)?;
+    for (name, panels, cols, w, h) in [
+        (
+            "work_precision.png",
+            lab.work_precision_panels(),
+            2,
+            1500,
+            1200,
+        ),
+        ("stability.png", lab.stability_panels(), 1, 1100, 750),
+        ("long_run.png", lab.long_run_panels(), 2, 1500, 600),
+        ("step_budget.png", lab.budget_panels(), 1, 1400, 600),
+    ] {
+        report.add(name, &render_png(&panels, cols, w, h)?)?;
+    }
+    report.commit()?;
     if args.json {
         outln!("{json}")?;
     } else {
@@ -113,24 +101,20 @@ fn run_vision(args: &Args) -> anyhow::Result<ExitCode> {
     } else {
         LabMode::Quick
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    let mut report = Report::new_in(&args.out)?;
     let progress = Progress::new(1);
     let lab = {
         let _bar = ProgressBarGuard::start(progress.clone(), "vision lab");
         run_lab(mode, &progress)
     };
     let json = serde_json::to_string_pretty(&lab)?;
-    let path = args.out.join("vision.json");
-    crate::output::write_file(&path, json.as_bytes())?;
-    write_vision_tables(&args.out, &lab)?;
-    write_png(
-        &args.out.join("vision_lab.png"),
-        &lab_panels(&lab),
-        2,
-        1500,
-        1500,
+    report.add("vision.json", json.as_bytes())?;
+    write_vision_tables(&mut report, &lab)?;
+    report.add(
+        "vision_lab.png",
+        &render_png(&lab_panels(&lab), 2, 1500, 1500)?,
     )?;
+    report.commit()?;
     if args.json {
         outln!("{json}")?;
     } else {
@@ -139,7 +123,7 @@ fn run_vision(args: &Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn write_vision_tables(dir: &Path, lab: &VisionLab) -> anyhow::Result<()> {
+fn write_vision_tables(report: &mut Report, lab: &VisionLab) -> anyhow::Result<()> {
     let mut w = String::from("localiser,noise_dn,rms_px,p95_px,pins,time_us_per_pin\n");
     for r in &lab.speed_accuracy {
         w.push_str(&format!(
@@ -152,8 +136,7 @@ fn write_vision_tables(dir: &Path, lab: &VisionLab) -> anyhow::Result<()> {
             csv_f(r.time_us_per_pin)
         ));
     }
-    let path = dir.join("vision_speed_accuracy.csv");
-    crate::output::write_file(&path, w.as_bytes())?;
+    report.add("vision_speed_accuracy.csv", w.as_bytes())?;
     let mut w = String::from(
         "factor,level,localiser,images,detection_rate,verdict_accuracy,status_accuracy,errors,rms_px\n",
     );
@@ -171,8 +154,7 @@ fn write_vision_tables(dir: &Path, lab: &VisionLab) -> anyhow::Result<()> {
             r.rms_px.map(csv_f).unwrap_or_default()
         ));
     }
-    let path = dir.join("vision_degradation.csv");
-    crate::output::write_file(&path, w.as_bytes())?;
+    report.add("vision_degradation.csv", w.as_bytes())?;
     Ok(())
 }
 
@@ -236,7 +218,7 @@ fn csv_f(x: f64) -> String {
     }
 }
 
-fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
+fn write_tables(report: &mut Report, lab: &DynamicsLab) -> anyhow::Result<()> {
     let mut w = String::from(
         "scene,method,setting_kind,setting,wall_ms,rhs_evals,aux_evals,steps,rejected,impacts,impact_count_error,stroke_err_mm,event_time_err_s,peak_force_rel_err,failed\n",
     );
@@ -260,7 +242,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
             p.failed.as_deref().unwrap_or("").replace('"', "'")
         ));
     }
-    crate::output::write_file(&dir.join("work_precision.csv"), w.as_bytes())?;
+    report.add("work_precision.csv", w.as_bytes())?;
     let mut w = String::from(
         "variant,method,omega_contact,predicted_stable_step_s,measured_stable_step_s,measured_accurate_step_s,failure_beyond\n",
     );
@@ -278,7 +260,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
                 .unwrap_or_default()
         ));
     }
-    crate::output::write_file(&dir.join("stability.csv"), w.as_bytes())?;
+    report.add("stability.csv", w.as_bytes())?;
     let mut w =
         String::from("scene,solver,rtol,rhs_evals,wall_ms,error,error_kind,impacts,failed\n");
     for p in &lab.outside_reference {
@@ -295,7 +277,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
             p.failed.as_deref().unwrap_or("").replace('"', "'")
         ));
     }
-    crate::output::write_file(&dir.join("outside_reference.csv"), w.as_bytes())?;
+    report.add("outside_reference.csv", w.as_bytes())?;
     let mut w = String::from(
         "rtol,horizon_revs,tolerance_horizon_revs,wall_ms,rhs_evals,as_good_as_tightest",
     );
@@ -318,7 +300,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
         }
         w.push('\n');
     }
-    crate::output::write_file(&dir.join("long_run.csv"), w.as_bytes())?;
+    report.add("long_run.csv", w.as_bytes())?;
     let mut w = String::from("clearance_mm,motor_rpm,chosen,stroke_diff_mm,force_diff_n,reason\n");
     for c in &lab.fidelity {
         w.push_str(&format!(
@@ -331,7 +313,7 @@ fn write_tables(dir: &Path, lab: &DynamicsLab) -> anyhow::Result<()> {
             c.reason.replace('"', "'")
         ));
     }
-    crate::output::write_file(&dir.join("fidelity.csv"), w.as_bytes())?;
+    report.add("fidelity.csv", w.as_bytes())?;
     Ok(())
 }
 

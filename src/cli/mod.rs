@@ -74,6 +74,8 @@ pub fn error_text(e: &anyhow::Error) -> String {
 /// Entry point of the binary: parses arguments, runs, and turns errors into
 /// a message on stderr and a non-zero exit code (never a panic trace).
 pub fn main() -> ExitCode {
+    // Starts the clock of PINSIGHT_MAX_WALL_S (if set).
+    let _ = crate::sim::process_deadline();
     let cli = Cli::parse();
     let result = match cli.command {
         None => tui::run_default(),

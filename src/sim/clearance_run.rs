@@ -439,6 +439,12 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
                     format!("{wall:.1} s of wall time (budget {} s)", opts.max_wall_s),
                 ));
             }
+            if super::process_deadline().is_some_and(|d| std::time::Instant::now() > d) {
+                return Err(budget(
+                    t,
+                    "the process's wall time (PINSIGHT_MAX_WALL_S)".to_string(),
+                ));
+            }
         }
         // Every pass (a step, or a restart at an event) counts: restarts
         // that make no step must not loop for ever either.

@@ -102,6 +102,27 @@ pub struct SimOptions {
     pub record_events: bool,
 }
 
+/// The wall-clock deadline of all model work in this process, from the
+/// environment variable `PINSIGHT_MAX_WALL_S` (seconds, counted from the
+/// first call; the command line calls it at start-up). An unattended job
+/// (CI, a line PC) sets it to be sure a command ends: every simulation
+/// running past it fails with "work budget exceeded", a sweep records the
+/// cases that did not run in time as failed and writes the others. Unset,
+/// zero or not a number: no deadline beyond each run's own
+/// [`SimOptions::max_wall_s`].
+pub fn process_deadline() -> Option<std::time::Instant> {
+    static DEADLINE: std::sync::OnceLock<Option<std::time::Instant>> = std::sync::OnceLock::new();
+    *DEADLINE.get_or_init(|| {
+        let s: f64 = std::env::var("PINSIGHT_MAX_WALL_S")
+            .ok()?
+            .trim()
+            .parse()
+            .ok()?;
+        (s.is_finite() && s > 0.0)
+            .then(|| std::time::Instant::now() + std::time::Duration::from_secs_f64(s.min(1e9)))
+    })
+}
+
 impl Default for SimOptions {
     fn default() -> Self {
         Self {
