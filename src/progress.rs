@@ -34,6 +34,15 @@ impl Progress {
         Self::new(0)
     }
 
+    /// A counter of its own for a part of this work that shares its cancel
+    /// flag: Ctrl-C on a batch also stops the study one of its steps runs.
+    pub fn child(&self) -> Arc<Self> {
+        Arc::new(Self {
+            cancelled: self.cancelled.clone(),
+            ..Self::default()
+        })
+    }
+
     pub fn set_total(&self, total: u64) {
         self.total.store(total, Ordering::Relaxed);
     }
@@ -161,8 +170,10 @@ mod tests {
         p.inc(2);
         assert!((p.fraction() - 0.75).abs() < 1e-12);
         assert!(!p.is_cancelled());
+        let c = p.child();
         p.cancel();
         assert!(p.is_cancelled());
+        assert!(c.is_cancelled(), "a child shares the cancel flag");
         assert_eq!(Progress::hidden().fraction(), 0.0);
     }
 }

@@ -132,6 +132,7 @@ pub fn run_text_cancellable(
         out: out_dir.to_path_buf(),
         size,
         written: Vec::new(),
+        progress: progress.child(),
     };
     progress.set_total(steps.len() as u64);
     let mut reports = Vec::new();
@@ -174,6 +175,9 @@ struct Runner {
     size: (u16, u16),
     /// Files written by export steps, in order.
     written: Vec<String>,
+    /// The run's progress: its cancel flag also stops a step's study or
+    /// yield (Ctrl-C inside a long step, not only between steps).
+    progress: std::sync::Arc<Progress>,
 }
 
 /// Allowed keys per step kind.
@@ -486,7 +490,7 @@ impl Runner {
             },
             "study" => {
                 let start = std::time::Instant::now();
-                self.session.run_study_now();
+                self.session.run_study_with(&self.progress.child());
                 let Some(r) = &self.session.study else {
                     return err(index, "run", "study", "the study did not run");
                 };
@@ -518,7 +522,7 @@ impl Runner {
                 )
             }
             "yield" => {
-                self.session.run_yield_now();
+                self.session.run_yield_with(&self.progress.child());
                 match &self.session.yields {
                     Some(y) => ok(
                         index,

@@ -110,3 +110,40 @@ fn a_cancelled_run_stops_before_the_next_step_and_lists_its_files() {
     assert!(r.table().contains("interrupted"), "{}", r.table());
     assert!(r.table().contains("files written: none"), "{}", r.table());
 }
+
+#[test]
+fn ctrl_c_inside_a_study_step_stops_the_study() {
+    // 5 × 4 × 5 = 100 cases of 20 revolutions: many seconds of work. A
+    // cancel 100 ms in stops the cases not yet started (recorded as
+    // "cancelled") and the run after this step.
+    let dir = tempfile::tempdir().unwrap();
+    let script = r#"
+        [[step]]
+        kind = "set"
+        study = { clearances_mm = [0.1, 0.2, 0.3, 0.4, 0.5], speeds_rpm = [1000, 1200, 1500, 1800], warmup = 10, revs = 10 }
+        [[step]]
+        kind = "run"
+        what = "study"
+        [[step]]
+        kind = "run"
+        what = "model"
+    "#;
+    let p = Progress::hidden();
+    let canceller = {
+        let p = p.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            p.cancel();
+        })
+    };
+    let r = run_text_cancellable(script, "s", dir.path(), dir.path(), &p).unwrap();
+    canceller.join().unwrap();
+    assert_eq!(r.steps.len(), 2, "{}", r.table());
+    assert!(r.interrupted);
+    assert_eq!(r.steps[1].outcome, Outcome::Error, "{}", r.table());
+    assert!(
+        r.steps[1].detail.contains("cancelled"),
+        "{}",
+        r.steps[1].detail
+    );
+}

@@ -178,7 +178,12 @@ impl Session {
 
     /// Runs the study now.
     pub fn run_study_now(&mut self) {
-        let r = run_study(&self.params, &self.study_setup, &Progress::hidden());
+        self.run_study_with(&Progress::hidden());
+    }
+
+    /// Runs the study now, reporting to (and stopped by) `progress`.
+    pub fn run_study_with(&mut self, progress: &Progress) {
+        let r = run_study(&self.params, &self.study_setup, progress);
         self.set_study(r);
     }
 
@@ -263,7 +268,12 @@ impl Session {
 
     /// Runs the batch yield now.
     pub fn run_yield_now(&mut self) {
-        let r = run_yield(&self.images, &self.recipe_book(), &Progress::hidden());
+        self.run_yield_with(&Progress::hidden());
+    }
+
+    /// Runs the batch yield now, reporting to (and stopped by) `progress`.
+    pub fn run_yield_with(&mut self, progress: &Progress) {
+        let r = run_yield(&self.images, &self.recipe_book(), progress);
         self.set_yield(r);
     }
 
