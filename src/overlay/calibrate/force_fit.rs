@@ -1,0 +1,209 @@
+//! Fitting the process load and the load cell's lag from the force cycles
+//! (bottom dead centre excluded), with a jackknife spread.
+
+use super::*;
+use crate::model::Params;
+use crate::model::table::Table;
+
+/// Measured data of one cycle for the force fit.
+pub(super) struct ForceCycle {
+    /// Stroke (mm, phase-corrected, laser zero corrected), force (N), velocity (m/s).
+    pub(super) s: Vec<f64>,
+    pub(super) f: Vec<f64>,
+    pub(super) v: Vec<f64>,
+    pub(super) dt: f64,
+}
+
+/// Grid points within this many degrees of bottom dead centre are left out of
+/// the force fit (the filter still runs through them): the load drops there
+/// within a fraction of a degree (c_d(v) as the pin bar stops), so on a
+/// 0.5° grid the exact drop time cannot be represented and a few points would
+/// dominate the residual.
+pub(super) const BDC_EXCLUDE_DEG: f64 = 4.0;
+
+/// The force fit uses the downstroke only up to the first grid point where,
+/// in or near the part (depth > −0.5 mm), the pin bar slows below this speed
+/// (m/s). With a clearance the pin bar dwells near bottom dead centre while
+/// the journal crosses the clearance; the process law then switches on the
+/// sign of a velocity of ~1 mm/s (c_d), far below what a differentiated laser
+/// signal resolves (~0.02 m/s), so those samples cannot be modelled from the
+/// measurement and would dominate the residual.
+pub(super) const FIT_MIN_SPEED: f64 = 0.1;
+
+/// The force objective for (standoff, τ): table values by linear least
+/// squares; returns (sum of squares, values, samples).
+// The fit's inputs are plain numbers of one objective evaluation; a struct
+// for them would only be unpacked again.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn force_fit(
+    cycles: &[&ForceCycle],
+    knots_mm: &[f64],
+    fixed: Option<&[f64]>,
+    f_wd: &Table,
+    standoff_mm: f64,
+    tau: f64,
+    v0: f64,
+    v1: f64,
+) -> (f64, Vec<f64>, usize) {
+    let k = knots_mm.len();
+    let cd = |v: f64| {
+        if v < v0 {
+            0.0
+        } else if v > v1 {
+            1.0
+        } else {
+            (v - v0) / (v1 - v0)
+        }
+    };
+    // Hat basis on the knots; beyond the last knot the last value holds.
+    let basis = |d: f64, out: &mut [f64]| {
+        out.iter_mut().for_each(|x| *x = 0.0);
+        if d <= 0.0 {
+            return;
+        }
+        if d >= knots_mm[k - 1] {
+            out[k - 1] = 1.0;
+            return;
+        }
+        let i = knots_mm.partition_point(|&x| x <= d).max(1);
+        let w = (d - knots_mm[i - 1]) / (knots_mm[i] - knots_mm[i - 1]);
+        out[i - 1] = 1.0 - w;
+        out[i] = w;
+    };
+    let mut ata = vec![0.0; k * k];
+    let mut atb = vec![0.0; k];
+    let mut cols: Vec<Vec<f64>> = Vec::new();
+    let mut ys: Vec<f64> = Vec::new();
+    let mut fixed_part: Vec<f64> = Vec::new();
+    let mut b = vec![0.0; k];
+    let mut prev = vec![0.0; k];
+    for c in cycles {
+        let (ea, b0, b1) = crate::overlay::predict::ramp_lag_coefficients(c.dt, tau);
+        let n = c.s.len();
+        let excl = (BDC_EXCLUDE_DEG / 360.0 * n as f64).round() as usize;
+        let stop = (0..n / 2)
+            .find(|&j| {
+                c.s[j].is_finite()
+                    && c.s[j] - standoff_mm > -0.5
+                    && c.v[j].is_finite()
+                    && c.v[j] < FIT_MIN_SPEED
+            })
+            .unwrap_or(n / 2);
+        let mut state = vec![0.0; k];
+        let mut state_wd = 0.0;
+        let mut prev_wd = 0.0;
+        prev.iter_mut().for_each(|x| *x = 0.0);
+        for j in 0..n {
+            let (s, v) = (c.s[j], c.v[j]);
+            let d = if s.is_finite() {
+                s - standoff_mm
+            } else {
+                f64::NAN
+            };
+            let mut wd = 0.0;
+            if d.is_finite() && v.is_finite() {
+                if v > 0.0 {
+                    basis(d, &mut b);
+                    let g = cd(v);
+                    b.iter_mut().for_each(|x| *x *= g);
+                } else {
+                    b.iter_mut().for_each(|x| *x = 0.0);
+                    wd = -f_wd.eval(d * 1e-3) * cd(-v);
+                }
+            } else {
+                b.iter_mut().for_each(|x| *x = 0.0);
+            }
+            for i in 0..k {
+                state[i] = ea * state[i] + b0 * prev[i] + b1 * b[i];
+            }
+            state_wd = ea * state_wd + b0 * prev_wd + b1 * wd;
+            prev.copy_from_slice(&b);
+            prev_wd = wd;
+            let y = c.f[j];
+            // Samples that carry information: force expected or measured, away from BDC.
+            let near_bdc = j.abs_diff(n / 2) <= excl;
+            if j < stop
+                && !near_bdc
+                && y.is_finite()
+                && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5)
+            {
+                cols.push(state.clone());
+                ys.push(y);
+                fixed_part.push(state_wd);
+            }
+        }
+    }
+    let vals: Vec<f64> = match fixed {
+        Some(v) => v.to_vec(),
+        None => {
+            for ((r, &y), &fw) in cols.iter().zip(&ys).zip(&fixed_part) {
+                for i in 0..k {
+                    atb[i] += r[i] * (y - fw);
+                    for j in 0..k {
+                        ata[i * k + j] += r[i] * r[j];
+                    }
+                }
+            }
+            // F_ins at zero depth is 0 by the definition of the standoff (the
+            // pin meets the part: no load yet). Left free, that value and the
+            // standoff trade off along the onset ramp (a + b·(s − standoff)).
+            if knots_mm[0] <= 0.0 {
+                for i in 0..k {
+                    ata[i] = 0.0;
+                    ata[i * k] = 0.0;
+                }
+                ata[0] = 1.0;
+                atb[0] = 0.0;
+            }
+            let m = nalgebra::DMatrix::from_row_slice(k, k, &ata)
+                + nalgebra::DMatrix::identity(k, k) * 1e-9;
+            let rhs = nalgebra::DVector::from_vec(atb.clone());
+            match m.lu().solve(&rhs) {
+                Some(x) => x.iter().copied().collect(),
+                None => vec![0.0; k],
+            }
+        }
+    };
+    let mut ss = 0.0;
+    for ((r, &y), &fw) in cols.iter().zip(&ys).zip(&fixed_part) {
+        let pred: f64 = r.iter().zip(&vals).map(|(a, b)| a * b).sum::<f64>() + fw;
+        ss += (y - pred).powi(2);
+    }
+    (ss, vals, ys.len())
+}
+
+/// Standoff and τ minimising the force objective (nested golden sections).
+pub(super) fn fit_force(
+    cycles: &[&ForceCycle],
+    knots: &[f64],
+    fixed: Option<&[f64]>,
+    p: &Params,
+    around: (f64, f64),
+    spans: (f64, f64),
+    iters: usize,
+) -> (f64, f64, Vec<f64>) {
+    let (s0, t0) = around;
+    let inner = |tau: f64| {
+        let so = golden(s0 - spans.0, s0 + spans.0, iters, |so| {
+            force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0
+        });
+        (
+            so,
+            force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0,
+        )
+    };
+    let tau = golden((t0 - spans.1).max(0.0), t0 + spans.1, iters, |t| inner(t).1);
+    let (so, _) = inner(tau);
+    let (_, vals, _) = force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1);
+    (so, tau, vals)
+}
+
+/// Jackknife standard error of estimates from delete-one-block fits.
+pub(super) fn jackknife(values: &[f64]) -> f64 {
+    let b = values.len();
+    if b < 2 {
+        return f64::NAN;
+    }
+    let m = values.iter().sum::<f64>() / b as f64;
+    ((b as f64 - 1.0) / b as f64 * values.iter().map(|x| (x - m).powi(2)).sum::<f64>()).sqrt()
+}
