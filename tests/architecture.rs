@@ -308,7 +308,6 @@ const NOT_YET_SPLIT: &[(&str, usize)] = &[
     ("rig/cycles.rs", 1656),
     ("rig/decode.rs", 835),
     ("rig/load.rs", 843),
-    ("rig/synth.rs", 890),
 ];
 
 #[test]
