@@ -307,7 +307,6 @@ fn no_import_circle_between_files() {
 const NOT_YET_SPLIT: &[(&str, usize)] = &[
     ("rig/cycles.rs", 1656),
     ("rig/decode.rs", 835),
-    ("rig/load.rs", 843),
 ];
 
 #[test]

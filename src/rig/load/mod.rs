@@ -9,13 +9,15 @@ use super::mcap_read::{
 };
 use super::meta::RigMeta;
 use super::report::{Finding, FindingCode, LoadReport, Place, ReadCounts, Severity, status_of};
-use super::signals::{self, Signal, SignalStats};
+use super::signals::{Signal, SignalStats};
 use crate::progress::Progress;
-use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 use std::sync::Arc;
+
+mod finish;
+use finish::{finish_signals, rig_metadata};
 
 /// How to load a log.
 #[derive(Debug, Clone, Default)]
@@ -399,38 +401,7 @@ pub(crate) fn load_inner(
         }
     }
 
-    // Metadata.
-    let rig_records: Vec<_> = metadata.iter().filter(|m| m.name == "rig").collect();
-    let mut raw = BTreeMap::new();
-    for m in &rig_records {
-        raw.extend(m.map.clone());
-    }
-    if rig_records.len() > 1 {
-        st.findings.push(Finding::new(
-            Severity::Warning,
-            FindingCode::Metadata,
-            &file,
-            None,
-            Some(Place::byte(rig_records[1].offset)),
-            format!(
-                "{} metadata records named 'rig'; merged, later values win",
-                rig_records.len()
-            ),
-        ));
-    }
-    let mut meta = RigMeta::from_raw(raw, &file, &mut st.findings);
-    meta.present = !rig_records.is_empty();
-    let meta = meta.apply_overrides(&opts.meta_overrides, &file, &mut st.findings);
-    if !meta.present {
-        st.findings.push(Finding::new(
-            Severity::Info,
-            FindingCode::MetadataMissing,
-            &file,
-            None,
-            None,
-            "no metadata record named 'rig': nominal clearance, speed, standoff etc. must come from the session",
-        ));
-    }
+    let meta = rig_metadata(&metadata, opts, &file, &mut st.findings);
 
     // Log span over all channels.
     let mut log_start: Option<i64> = None;
@@ -443,63 +414,7 @@ pub(crate) fn load_inner(
     }
     let span = log_start.zip(log_end);
 
-    // Finish the signals.
-    let mut sigs = Signals::default();
-    let mut sig_stats = Vec::new();
-    let mut sig_findings: Vec<(SignalKind, String, Vec<Finding>)> = Vec::new();
-    // Signals are independent: finish them in parallel.
-    let pending: Vec<_> = std::mem::take(&mut st.sigs).into_iter().collect();
-    let finished: Vec<_> = pending
-        .into_par_iter()
-        .map(|(kind, (topic, field, buf))| {
-            let r = signals::finish(kind, &topic, &field, buf, &file, span);
-            (kind, topic, r)
-        })
-        .collect();
-    for (kind, topic, (s, stt, f)) in finished {
-        sig_findings.push((kind, topic, f));
-        sig_stats.push(stt);
-        *sigs.slot(kind) = Some(s);
-    }
-    // Time-stream findings of signals sharing a topic are reported once.
-    let time_codes = [
-        FindingCode::OutOfOrder,
-        FindingCode::TimeBackwards,
-        FindingCode::DuplicateTimestamps,
-        FindingCode::Gap,
-        FindingCode::EmptyChannel,
-        FindingCode::MalformedMessage,
-    ];
-    let mut topic_kinds: BTreeMap<String, Vec<SignalKind>> = BTreeMap::new();
-    for (k, t, _) in &sig_findings {
-        topic_kinds.entry(t.clone()).or_default().push(*k);
-    }
-    let mut done_topics = BTreeSet::new();
-    for (kind, topic, fs) in sig_findings {
-        let kinds = &topic_kinds[&topic];
-        let first = done_topics.insert(topic.clone());
-        let own = format!("{topic} ({})", kind.name());
-        let group = format!(
-            "{topic} ({})",
-            kinds
-                .iter()
-                .map(|k| k.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        for mut f in fs {
-            if time_codes.contains(&f.code) {
-                if !first {
-                    continue;
-                }
-                if kinds.len() > 1 {
-                    f.message = f.message.replacen(&own, &group, 1);
-                    f.channel = Some(group.clone());
-                }
-            }
-            st.findings.push(f);
-        }
-    }
+    let (sigs, sig_stats) = finish_signals(&mut st, &file, span);
 
     // Channels.
     let mut chan_infos = Vec::new();
