@@ -155,8 +155,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 (Some(s), _) => writeln!(
                     out,
                     "{:>8} {:>7} {:<17} {:>8} {:>11.5} {:>11.5} {:>10.4}",
-                    c.clearance_mm,
-                    c.motor_rpm,
+                    crate::fmt::plain(c.clearance_mm),
+                    crate::fmt::plain(c.motor_rpm),
                     c.material,
                     s.n_impacts,
                     s.disp_dev_mean_mm,
@@ -166,7 +166,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 (None, Some(e)) => writeln!(
                     out,
                     "{:>8} {:>7} {:<17} error: {e}",
-                    c.clearance_mm, c.motor_rpm, c.material
+                    crate::fmt::plain(c.clearance_mm),
+                    crate::fmt::plain(c.motor_rpm),
+                    c.material
                 )?,
                 (None, None) => {}
             }

@@ -1,0 +1,219 @@
+//! The sensor zeros of the cycle analysis, estimated and reported, never
+//! silently absorbed: the laser zero mark (stroke at which the laser reads
+//! 0) from the off-part stroke, the force tare (a line in time) from the
+//! off-part force; metadata or a session override wins over the estimate,
+//! with a warning when they disagree.
+
+use super::fit::{line_fit, mean_std};
+use super::types::{CycleOptions, CycleSet, OffsetEstimate, ValueSource};
+use crate::rig::load::RigLog;
+use crate::rig::report::{Finding, FindingCode, Severity};
+use crate::rig::signals::Signal;
+
+/// What both estimates read besides the grids.
+pub(super) struct OffsetContext<'a> {
+    /// The ideal stroke on the crank-angle grid (mm).
+    pub ideal: &'a [f64],
+    /// Grid points well off the part (stroke below the standoff − 1 mm).
+    pub off_part: &'a [bool],
+    /// Grid points per revolution.
+    pub n: usize,
+    pub log: &'a RigLog,
+    pub opts: &'a CycleOptions,
+    pub file: &'a str,
+}
+
+/// The laser zero mark from the displacement grids (before they become
+/// stroke grids); sets `set.offsets.laser_zero_mm`.
+pub(super) fn laser_zero(
+    d: &Signal,
+    raw_disp: &[Vec<f64>],
+    set: &mut CycleSet,
+    ctx: &OffsetContext,
+    findings: &mut Vec<Finding>,
+) {
+    let label = format!("{} (displacement)", d.topic);
+    let per_cycle: Vec<f64> = raw_disp
+        .iter()
+        .zip(&set.cycles)
+        .filter(|(_, c)| c.usable)
+        .filter_map(|(g, _)| {
+            let v: Vec<f64> = g
+                .iter()
+                .zip(ctx.ideal)
+                .zip(ctx.off_part)
+                .filter(|((x, _), o)| x.is_finite() && **o)
+                .map(|((x, s), _)| s - x)
+                .collect();
+            (v.len() > ctx.n / 10).then(|| v.iter().sum::<f64>() / v.len() as f64)
+        })
+        .collect();
+    let (m, s) = mean_std(&per_cycle);
+    let mut lz = OffsetEstimate {
+        name: "laser zero mark".into(),
+        unit: "mm".into(),
+        applied: 0.0,
+        source: ValueSource::Unavailable,
+        metadata: ctx.log.meta.laser_zero_mm,
+        estimate: m.is_finite().then_some(m),
+        sigma: (per_cycle.len() > 1).then(|| s / (per_cycle.len() as f64).sqrt()),
+        systematic: ctx.log.meta.clearance_mm,
+        note: String::new(),
+    };
+    let est_text = match (lz.estimate, lz.sigma) {
+        (Some(e), Some(s)) => format!(
+            "{e:.4} mm ± {s:.4} mm (mean of s_ideal − displacement off the part over {} cycles; with a clearance of {} the journal's mean position biases it by up to that much)",
+            per_cycle.len(),
+            ctx.log
+                .meta
+                .clearance_mm
+                .map_or("c".to_string(), |c| format!("{c} mm"))
+        ),
+        _ => "not estimable".into(),
+    };
+    if let Some(v) = ctx.opts.laser_zero_mm {
+        lz.applied = v;
+        lz.source = ValueSource::Override;
+        lz.note = format!("session override; estimate {est_text}");
+    } else if let Some(v) = ctx.log.meta.laser_zero_mm {
+        lz.applied = v;
+        lz.source = ValueSource::Metadata;
+        lz.note = format!("metadata laser_zero_mm; estimate {est_text}");
+        if let (Some(e), Some(s)) = (lz.estimate, lz.sigma) {
+            let allow = 3.0 * s + ctx.log.meta.clearance_mm.unwrap_or(0.0);
+            if (e - v).abs() > allow {
+                findings.push(Finding::new(
+                        Severity::Warning,
+                        FindingCode::OffsetEstimated,
+                        ctx.file,
+                        Some(&label),
+                        None,
+                        format!("metadata laser_zero_mm = {} mm disagrees with the estimate {est_text}; the metadata value is used", crate::fmt::plain(v)),
+                    ));
+            }
+        }
+    } else if let Some(e) = lz.estimate {
+        lz.applied = e;
+        lz.source = ValueSource::Estimated;
+        lz.note = format!("no laser_zero_mm in the metadata: estimate {est_text} applied");
+        findings.push(Finding::new(
+                Severity::Info,
+                FindingCode::OffsetEstimated,
+                ctx.file,
+                Some(&label),
+                None,
+                format!("laser zero mark (stroke at which the laser reads 0) estimated at {est_text}; applied since the metadata has no laser_zero_mm"),
+            ));
+    }
+    set.offsets.laser_zero_mm = lz;
+}
+
+/// The force tare from the off-part force of the usable cycles, subtracted
+/// from the force grids in place; sets the tare fields of `set.offsets`.
+pub(super) fn force_tare(
+    f: &Signal,
+    raw_force: &mut [Vec<f64>],
+    set: &mut CycleSet,
+    ctx: &OffsetContext,
+    findings: &mut Vec<Finding>,
+) {
+    let label = format!("{} (force)", f.topic);
+    let mut xs = Vec::new();
+    let mut ys = Vec::new();
+    let t_ref = set.cycles.first().map(|c| c.t_start_ns).unwrap_or(0);
+    for (g, c) in raw_force.iter().zip(&set.cycles) {
+        if !c.usable {
+            continue;
+        }
+        let v: Vec<f64> = g
+            .iter()
+            .zip(ctx.off_part)
+            .filter(|(x, o)| x.is_finite() && **o)
+            .map(|(x, _)| *x)
+            .collect();
+        if v.len() > ctx.n / 10 {
+            xs.push(((c.t_start_ns + c.t_end_ns) / 2 - t_ref) as f64 * 1e-9);
+            ys.push(v.iter().sum::<f64>() / v.len() as f64);
+        }
+    }
+    let (m, s) = mean_std(&ys);
+    let fit = line_fit(&xs, &ys);
+    let mut ft = OffsetEstimate {
+        name: "force tare".into(),
+        unit: "N".into(),
+        applied: 0.0,
+        source: ValueSource::Unavailable,
+        metadata: ctx.log.meta.force_tare_n,
+        estimate: m.is_finite().then_some(m),
+        sigma: (ys.len() > 1).then(|| s / (ys.len() as f64).sqrt()),
+        systematic: None,
+        note: String::new(),
+    };
+    if let Some(lf) = fit {
+        let x = |t: Option<i64>| t.map(|t| (t - t_ref) as f64 * 1e-9);
+        set.offsets.force_tare_start_n = x(ctx.log.log_start_ns).map(|x| lf.at(x));
+        set.offsets.force_tare_end_n = x(ctx.log.log_end_ns).map(|x| lf.at(x));
+        set.offsets.force_tare_start_sigma_n = x(ctx.log.log_start_ns).map(|x| lf.sigma_at(x));
+        set.offsets.force_tare_end_sigma_n = x(ctx.log.log_end_ns).map(|x| lf.sigma_at(x));
+        set.offsets.force_tare_drift_n_per_s = Some(lf.b);
+        set.offsets.force_tare_drift_sigma = Some(lf.sigma_b());
+    }
+    let est_text = match (ft.estimate, ft.sigma) {
+        (Some(e), Some(s)) => format!(
+            "{e:.4} N ± {s:.4} N (off-part mean over {} cycles; {:.4} N at the log start, {:.4} N at its end, drift {:.4} N/s)",
+            ys.len(),
+            set.offsets.force_tare_start_n.unwrap_or(e),
+            set.offsets.force_tare_end_n.unwrap_or(e),
+            set.offsets.force_tare_drift_n_per_s.unwrap_or(0.0)
+        ),
+        _ => "not estimable".into(),
+    };
+    let mut tare_line: Option<(f64, f64)> = None;
+    if let Some(v) = ctx.opts.force_tare_n {
+        ft.applied = v;
+        ft.source = ValueSource::Override;
+        ft.note = format!("session override (constant); estimate {est_text}");
+    } else if let Some(v) = ctx.log.meta.force_tare_n {
+        ft.applied = v;
+        ft.source = ValueSource::Metadata;
+        ft.note = format!("metadata force_tare_n (constant); estimate {est_text}");
+        if let (Some(e), Some(s)) = (ft.estimate, ft.sigma) {
+            if (e - v).abs() > (3.0 * s).max(0.02) {
+                findings.push(Finding::new(
+                        Severity::Warning,
+                        FindingCode::OffsetEstimated,
+                        ctx.file,
+                        Some(&label),
+                        None,
+                        format!("metadata force_tare_n = {} N disagrees with the off-part reading {est_text}; the metadata value is used", crate::fmt::plain(v)),
+                    ));
+            }
+        }
+    } else if let Some(e) = ft.estimate {
+        ft.applied = e;
+        ft.source = ValueSource::Estimated;
+        tare_line = fit.map(|lf| (lf.a, lf.b));
+        ft.note = format!(
+            "no force_tare_n in the metadata: the fitted tare line is subtracted cycle by cycle; estimate {est_text}"
+        );
+        findings.push(Finding::new(
+                Severity::Info,
+                FindingCode::OffsetEstimated,
+                ctx.file,
+                Some(&label),
+                None,
+                format!("force tare estimated at {est_text}; subtracted (linear in time) since the metadata has no force_tare_n"),
+            ));
+    }
+    // Apply the tare to the grids.
+    for (g, c) in raw_force.iter_mut().zip(&set.cycles) {
+        let tare = match tare_line {
+            Some((a, b)) => a + b * (((c.t_start_ns + c.t_end_ns) / 2 - t_ref) as f64 * 1e-9),
+            None => ft.applied,
+        };
+        for v in g.iter_mut() {
+            *v -= tare;
+        }
+    }
+    set.offsets.force_tare_n = ft;
+}
