@@ -5,14 +5,16 @@
 //! ([`Dop853::prepare_dense`]), so steps that need no interpolation cost 12
 //! evaluations, not 15.
 
+use super::control::{StiffnessMonitor, first_step, trial_step};
 use super::dop853_coef::*;
-use super::{Stats, StepError, StepperConfig, System, all_finite, initial_step};
+use super::{Stats, StepError, StepperConfig, System, all_finite};
 
 const SAFE: f64 = 0.9;
 const FAC1: f64 = 0.333;
 const FAC2: f64 = 6.0;
 const EXPO1: f64 = 1.0 / 8.0;
-const NSTIFF: u64 = 1000;
+/// h·|λ| where DOP853's stability region ends on the negative real axis.
+const STIFF_BOUNDARY: f64 = 6.1;
 
 #[derive(Debug, Clone)]
 pub struct Dop853<const N: usize> {
@@ -32,8 +34,7 @@ pub struct Dop853<const N: usize> {
     pub(crate) fresh: bool,
     dense_ready: bool,
     rcont: [[f64; N]; 8],
-    iasti: u32,
-    nonsti: u32,
+    stiffness: StiffnessMonitor,
     pub stats: Stats,
 }
 
@@ -68,8 +69,7 @@ impl<const N: usize> Dop853<N> {
             fresh: true,
             dense_ready: true,
             rcont: [[0.0; N]; 8],
-            iasti: 0,
-            nonsti: 0,
+            stiffness: StiffnessMonitor::default(),
             stats: Stats::default(),
         }
     }
@@ -95,20 +95,8 @@ impl<const N: usize> Dop853<N> {
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
         if self.fresh {
-            self.h = if self.cfg.h > 0.0 || self.cfg.fixed {
-                self.cfg.h
-            } else {
-                initial_step(
-                    sys,
-                    self.t,
-                    &self.y,
-                    &self.f,
-                    &self.cfg.tol,
-                    8,
-                    h_max,
-                    &mut self.stats.rhs_evals,
-                )
-            };
+            let at = (self.t, &self.y, &self.f);
+            self.h = first_step(&self.cfg, &self.cfg.tol, sys, at, 8, h_max, &mut self.stats);
             self.fresh = false;
         }
         let ncon = self.cfg.tol.n_controlled() as f64;
@@ -117,20 +105,8 @@ impl<const N: usize> Dop853<N> {
         k[0] = self.f;
         let mut h = self.h.min(h_max);
         loop {
-            if self.stats.steps + self.stats.rejected >= self.cfg.max_steps {
-                return Err(StepError::TooManySteps {
-                    t,
-                    steps: self.stats.steps,
-                });
-            }
-            if 0.1 * h.abs() <= t.abs() * f64::EPSILON || !(h > 0.0) {
-                return Err(StepError::StepSizeUnderflow { t, h });
-            }
-            let mut last = false;
-            if t + 1.01 * h >= t_end {
-                h = t_end - t;
-                last = true;
-            }
+            let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
+            h = h_try;
             let rows: [&[f64]; 11] = [&A2, &A3, &A4, &A5, &A6, &A7, &A8, &A9, &A10, &A11, &A12];
             let tph = if last { t_end } else { t + h };
             let mut y12 = y;
@@ -203,31 +179,13 @@ impl<const N: usize> Dop853<N> {
                     return Err(StepError::NonFinite { t: tph });
                 }
                 self.stats.steps += 1;
-                if self.stats.steps % NSTIFF == 0 || self.iasti > 0 {
-                    let mut num = 0.0;
-                    let mut den = 0.0;
-                    for i in 0..N {
-                        num += (fnew[i] - k[11][i]).powi(2);
-                        den += (ynew[i] - y12[i]).powi(2);
-                    }
-                    let hlamb = if den > 0.0 {
-                        h * (num / den).sqrt()
-                    } else {
-                        0.0
-                    };
-                    if hlamb > 6.1 {
-                        self.nonsti = 0;
-                        self.iasti += 1;
-                        if self.iasti >= 15 {
-                            self.stats.stiff_steps += 1;
-                        }
-                    } else {
-                        self.nonsti += 1;
-                        if self.nonsti >= 6 {
-                            self.iasti = 0;
-                        }
-                    }
-                }
+                self.stiffness.observe(
+                    h,
+                    (&fnew, &k[11]),
+                    (&ynew, &y12),
+                    STIFF_BOUNDARY,
+                    &mut self.stats,
+                );
                 k[12] = fnew;
                 if self.rejected_last {
                     hnew = hnew.min(h);

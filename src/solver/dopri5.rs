@@ -2,7 +2,8 @@
 //! (Lund stabilisation, β = 0.04), stiffness detection, and the 4th-order
 //! continuous extension.
 
-use super::{Stats, StepError, StepperConfig, System, all_finite, initial_step, wrms};
+use super::control::{StiffnessMonitor, first_step, trial_step};
+use super::{Stats, StepError, StepperConfig, System, all_finite, wrms};
 
 const C2: f64 = 0.2;
 const C3: f64 = 0.3;
@@ -46,7 +47,8 @@ const FAC1: f64 = 0.2; // smallest step ratio hnew/h
 const FAC2: f64 = 10.0; // largest step ratio
 const BETA: f64 = 0.04;
 const EXPO1: f64 = 0.2 - BETA * 0.75;
-const NSTIFF: u64 = 1000;
+/// h·|λ| where DOPRI5's stability region ends on the negative real axis.
+const STIFF_BOUNDARY: f64 = 3.25;
 
 #[derive(Debug, Clone)]
 pub struct Dopri5<const N: usize> {
@@ -61,8 +63,7 @@ pub struct Dopri5<const N: usize> {
     rejected_last: bool,
     pub(crate) fresh: bool,
     rcont: [[f64; N]; 5],
-    iasti: u32,
-    nonsti: u32,
+    stiffness: StiffnessMonitor,
     pub stats: Stats,
 }
 
@@ -79,8 +80,7 @@ impl<const N: usize> Dopri5<N> {
             rejected_last: false,
             fresh: true,
             rcont: [[0.0; N]; 5],
-            iasti: 0,
-            nonsti: 0,
+            stiffness: StiffnessMonitor::default(),
             stats: Stats::default(),
         }
     }
@@ -102,40 +102,16 @@ impl<const N: usize> Dopri5<N> {
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
         if self.fresh {
-            self.h = if self.cfg.h > 0.0 || self.cfg.fixed {
-                self.cfg.h
-            } else {
-                initial_step(
-                    sys,
-                    self.t,
-                    &self.y,
-                    &self.f,
-                    &self.cfg.tol,
-                    5,
-                    h_max,
-                    &mut self.stats.rhs_evals,
-                )
-            };
+            let at = (self.t, &self.y, &self.f);
+            self.h = first_step(&self.cfg, &self.cfg.tol, sys, at, 5, h_max, &mut self.stats);
             self.fresh = false;
         }
         let ncon = self.cfg.tol.n_controlled();
         let (t, y, k1) = (self.t, self.y, self.f);
         let mut h = self.h.min(h_max);
         loop {
-            if self.stats.steps + self.stats.rejected >= self.cfg.max_steps {
-                return Err(StepError::TooManySteps {
-                    t,
-                    steps: self.stats.steps,
-                });
-            }
-            if 0.1 * h.abs() <= t.abs() * f64::EPSILON || !(h > 0.0) {
-                return Err(StepError::StepSizeUnderflow { t, h });
-            }
-            let mut last = false;
-            if t + 1.01 * h >= t_end {
-                h = t_end - t;
-                last = true;
-            }
+            let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
+            h = h_try;
             let mut yt = [0.0; N];
             let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) =
                 ([0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N]);
@@ -202,32 +178,14 @@ impl<const N: usize> Dopri5<N> {
             if err <= 1.0 {
                 self.facold = err.max(1e-4);
                 self.stats.steps += 1;
-                // Stiffness detection (Hairer): h·|λ| estimated from the last two stages.
-                if self.stats.steps % NSTIFF == 0 || self.iasti > 0 {
-                    let mut num = 0.0;
-                    let mut den = 0.0;
-                    for i in 0..N {
-                        num += (k7[i] - k6[i]).powi(2);
-                        den += (y1[i] - ysti[i]).powi(2);
-                    }
-                    let hlamb = if den > 0.0 {
-                        h * (num / den).sqrt()
-                    } else {
-                        0.0
-                    };
-                    if hlamb > 3.25 {
-                        self.nonsti = 0;
-                        self.iasti += 1;
-                        if self.iasti >= 15 {
-                            self.stats.stiff_steps += 1;
-                        }
-                    } else {
-                        self.nonsti += 1;
-                        if self.nonsti >= 6 {
-                            self.iasti = 0;
-                        }
-                    }
-                }
+                // Stiffness detection (Hairer): h·|λ| from the last two stages.
+                self.stiffness.observe(
+                    h,
+                    (&k7, &k6),
+                    (&y1, &ysti),
+                    STIFF_BOUNDARY,
+                    &mut self.stats,
+                );
                 // Continuous extension.
                 let mut r = [[0.0; N]; 5];
                 for i in 0..N {

@@ -33,6 +33,7 @@
 
 use serde::{Deserialize, Serialize};
 
+mod control;
 pub mod dop853;
 mod dop853_coef;
 pub mod dopri5;
@@ -305,48 +306,6 @@ impl<const N: usize> Stepper<N> {
     pub fn h_next(&self) -> f64 {
         dispatch!(self, s => s.h)
     }
-}
-
-/// Initial step size (Hairer's HINIT) for a method of order `p`.
-pub(crate) fn initial_step<const N: usize, S: System<N>>(
-    sys: &S,
-    t: f64,
-    y: &[f64; N],
-    f0: &[f64; N],
-    tol: &Tolerance<N>,
-    p: u32,
-    h_max: f64,
-    evals: &mut u64,
-) -> f64 {
-    let w = tol.weights(y, y);
-    let n = tol.n_controlled();
-    let d0 = wrms(y, &w, n);
-    let d1 = wrms(f0, &w, n);
-    let mut h0 = if d0 < 1e-10 || d1 < 1e-10 {
-        1e-6
-    } else {
-        0.01 * d0 / d1
-    };
-    h0 = h0.min(h_max);
-    let mut y1 = [0.0; N];
-    for i in 0..N {
-        y1[i] = y[i] + h0 * f0[i];
-    }
-    let mut f1 = [0.0; N];
-    sys.rhs(t + h0, &y1, &mut f1);
-    *evals += 1;
-    let mut df = [0.0; N];
-    for i in 0..N {
-        df[i] = f1[i] - f0[i];
-    }
-    let d2 = wrms(&df, &w, n) / h0;
-    let dm = d1.max(d2);
-    let h1 = if dm <= 1e-15 {
-        (h0 * 1e-3).max(1e-6)
-    } else {
-        (0.01 / dm).powf(1.0 / (p as f64 + 1.0))
-    };
-    (100.0 * h0).min(h1).min(h_max)
 }
 
 #[inline]

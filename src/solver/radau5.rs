@@ -9,6 +9,7 @@
 //! A into one real and one complex N×N system — simpler, and the same
 //! iterates.
 
+use super::control::{first_step, trial_step};
 use super::{Scale, Stats, StepError, StepperConfig, System, Tolerance, all_finite, wrms};
 
 const SQ6: f64 = 2.449_489_742_783_178;
@@ -262,20 +263,8 @@ impl<const N: usize> Radau5<N> {
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
         if self.fresh {
-            self.h = if self.cfg.h > 0.0 || self.cfg.fixed {
-                self.cfg.h
-            } else {
-                super::initial_step(
-                    sys,
-                    self.t,
-                    &self.y,
-                    &self.f,
-                    &self.tol,
-                    3,
-                    h_max,
-                    &mut self.stats.rhs_evals,
-                )
-            };
+            let at = (self.t, &self.y, &self.f);
+            self.h = first_step(&self.cfg, &self.tol, sys, at, 3, h_max, &mut self.stats);
             self.fresh = false;
         }
         let ncon = self.tol.n_controlled();
@@ -283,20 +272,8 @@ impl<const N: usize> Radau5<N> {
         let mut h = self.h.min(h_max);
         let mut newton_fails = 0u32;
         loop {
-            if self.stats.steps + self.stats.rejected >= self.cfg.max_steps {
-                return Err(StepError::TooManySteps {
-                    t,
-                    steps: self.stats.steps,
-                });
-            }
-            if 0.1 * h.abs() <= t.abs() * f64::EPSILON || !(h > 0.0) {
-                return Err(StepError::StepSizeUnderflow { t, h });
-            }
-            let mut last = false;
-            if t + 1.01 * h >= t_end {
-                h = t_end - t;
-                last = true;
-            }
+            let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
+            h = h_try;
             if !self.jac_valid {
                 self.compute_jacobian(sys);
             }

@@ -5,6 +5,7 @@
 //! only to land on `t_end`, on an event, or under `h_max`). A non-finite
 //! state is reported as a failure — that is how an unstable step shows.
 
+use super::control::check_budget;
 use super::{Stats, StepError, StepperConfig, System, all_finite};
 
 #[derive(Debug, Clone)]
@@ -49,12 +50,7 @@ impl<const N: usize> Rk4<N> {
     }
 
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
-        if self.stats.steps + self.stats.rejected >= self.cfg.max_steps {
-            return Err(StepError::TooManySteps {
-                t: self.t,
-                steps: self.stats.steps,
-            });
-        }
+        check_budget(&self.stats, self.cfg.max_steps, self.t)?;
         let mut h = self.cfg.h.min(h_max).min(self.cfg.h_max);
         if !(h > 0.0) {
             return Err(StepError::StepSizeUnderflow { t: self.t, h });

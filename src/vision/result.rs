@@ -106,6 +106,32 @@ pub struct PinResult {
     pub reason: Option<String>,
 }
 
+impl PinResult {
+    /// A grid position with nothing found yet: `missing` at its fitted
+    /// nominal point, every measurement empty. The views fill in what
+    /// they measure.
+    pub fn missing(row: u32, col: u32, nominal_px: (f64, f64)) -> Self {
+        PinResult {
+            row,
+            col,
+            status: PinStatus::Missing,
+            nominal_x_px: nominal_px.0,
+            nominal_y_px: nominal_px.1,
+            x_px: None,
+            y_px: None,
+            dx_mm: None,
+            dy_mm: None,
+            offset_mm: None,
+            area_ratio: None,
+            height_mm: None,
+            width_ratio: None,
+            elongation: None,
+            contrast_ratio: None,
+            reason: None,
+        }
+    }
+}
+
 /// Something detected that belongs to no grid position.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ExtraResult {

@@ -466,24 +466,7 @@ pub fn inspect_side<P: Px>(
                     .abs()
                     .total_cmp(&(b.1.u_px - u_nom_px).abs())
             });
-        let mut pr = PinResult {
-            row,
-            col,
-            status: PinStatus::Missing,
-            nominal_x_px: nx,
-            nominal_y_px: ny,
-            x_px: None,
-            y_px: None,
-            dx_mm: None,
-            dy_mm: None,
-            offset_mm: None,
-            area_ratio: None,
-            height_mm: None,
-            width_ratio: None,
-            elongation: None,
-            contrast_ratio: None,
-            reason: None,
-        };
+        let mut pr = PinResult::missing(row, col, (nx, ny));
         if let Some((i, b)) = best {
             used[i] = true;
             let du = (b.u_px - u_nom_px) * mm_per_px;

@@ -500,24 +500,7 @@ pub fn inspect_top<P: Px>(
     let mut pins = Vec::with_capacity(positions.len());
     for (pi, &(row, col)) in positions.iter().enumerate() {
         let (nx, ny) = nominal[pi];
-        let mut pr = PinResult {
-            row,
-            col,
-            status: PinStatus::Missing,
-            nominal_x_px: nx,
-            nominal_y_px: ny,
-            x_px: None,
-            y_px: None,
-            dx_mm: None,
-            dy_mm: None,
-            offset_mm: None,
-            area_ratio: None,
-            height_mm: None,
-            width_ratio: None,
-            elongation: None,
-            contrast_ratio: None,
-            reason: None,
-        };
+        let mut pr = PinResult::missing(row, col, (nx, ny));
         if let Some(ci) = pos_cand[pi] {
             let m = &cands[ci].m;
             let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);

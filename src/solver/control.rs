@@ -1,0 +1,167 @@
+//! The step-size scaffolding the steppers share, as in Hairer's codes: the
+//! starting step (HINIT), the guards before every trial step (the work
+//! budget, a step too small for the clock, the last step clipped onto
+//! `t_end`) and the stiffness monitor of the explicit methods. Each stepper
+//! keeps its own stages, error estimate and controller constants; what is
+//! here is the same logic in all of them, written once.
+
+use super::{Stats, StepError, StepperConfig, System, Tolerance, wrms};
+
+/// The step a run starts with: the configured one (always for a fixed
+/// step), else Hairer's estimate for a method of order `order`. `at` is the
+/// starting point (t, y, f(t, y)); the estimate's evaluation is counted.
+pub(crate) fn first_step<const N: usize, S: System<N>>(
+    cfg: &StepperConfig<N>,
+    tol: &Tolerance<N>,
+    sys: &S,
+    at: (f64, &[f64; N], &[f64; N]),
+    order: u32,
+    h_max: f64,
+    stats: &mut Stats,
+) -> f64 {
+    if cfg.h > 0.0 || cfg.fixed {
+        cfg.h
+    } else {
+        initial_step(
+            sys,
+            at.0,
+            at.1,
+            at.2,
+            tol,
+            order,
+            h_max,
+            &mut stats.rhs_evals,
+        )
+    }
+}
+
+/// Fails once the run has used its step budget (accepted + rejected):
+/// a run reports where it stopped instead of spinning.
+pub(crate) fn check_budget(stats: &Stats, max_steps: u64, t: f64) -> Result<(), StepError> {
+    if stats.steps + stats.rejected >= max_steps {
+        return Err(StepError::TooManySteps {
+            t,
+            steps: stats.steps,
+        });
+    }
+    Ok(())
+}
+
+/// The guards before a trial step of an error-controlled method from `t`
+/// with step `h`: the budget, a step below the clock's resolution (or not
+/// a positive number), and the step stretched or cut to land on `t_end`
+/// when it comes within 1 % of it. Returns the step to try and whether it
+/// is the last.
+pub(crate) fn trial_step(
+    stats: &Stats,
+    max_steps: u64,
+    t: f64,
+    h: f64,
+    t_end: f64,
+) -> Result<(f64, bool), StepError> {
+    check_budget(stats, max_steps, t)?;
+    if 0.1 * h.abs() <= t.abs() * f64::EPSILON || !(h > 0.0) {
+        return Err(StepError::StepSizeUnderflow { t, h });
+    }
+    if t + 1.01 * h >= t_end {
+        Ok((t_end - t, true))
+    } else {
+        Ok((h, false))
+    }
+}
+
+/// Hairer's stiffness detection for explicit methods: every 1000th
+/// accepted step (and each step while stiffness is suspected) estimates
+/// h·|λ| from two stages evaluated at the same time, and counts a step
+/// as stiff after 15 estimates in a row beyond the method's stability
+/// boundary (6 below it clear the suspicion).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct StiffnessMonitor {
+    suspected: u32,
+    clear: u32,
+}
+
+impl StiffnessMonitor {
+    const EVERY: u64 = 1000;
+
+    /// Observes the accepted step `h`: `f_pair` two right-hand sides and
+    /// `y_pair` the states they were evaluated at; `boundary` is the
+    /// method's h·|λ| stability limit along the negative real axis.
+    pub(crate) fn observe<const N: usize>(
+        &mut self,
+        h: f64,
+        f_pair: (&[f64; N], &[f64; N]),
+        y_pair: (&[f64; N], &[f64; N]),
+        boundary: f64,
+        stats: &mut Stats,
+    ) {
+        if stats.steps % Self::EVERY != 0 && self.suspected == 0 {
+            return;
+        }
+        let mut num = 0.0;
+        let mut den = 0.0;
+        for i in 0..N {
+            num += (f_pair.0[i] - f_pair.1[i]).powi(2);
+            den += (y_pair.0[i] - y_pair.1[i]).powi(2);
+        }
+        let hlamb = if den > 0.0 {
+            h * (num / den).sqrt()
+        } else {
+            0.0
+        };
+        if hlamb > boundary {
+            self.clear = 0;
+            self.suspected += 1;
+            if self.suspected >= 15 {
+                stats.stiff_steps += 1;
+            }
+        } else {
+            self.clear += 1;
+            if self.clear >= 6 {
+                self.suspected = 0;
+            }
+        }
+    }
+}
+
+/// Initial step size (Hairer's HINIT) for a method of order `p`.
+pub(crate) fn initial_step<const N: usize, S: System<N>>(
+    sys: &S,
+    t: f64,
+    y: &[f64; N],
+    f0: &[f64; N],
+    tol: &Tolerance<N>,
+    p: u32,
+    h_max: f64,
+    evals: &mut u64,
+) -> f64 {
+    let w = tol.weights(y, y);
+    let n = tol.n_controlled();
+    let d0 = wrms(y, &w, n);
+    let d1 = wrms(f0, &w, n);
+    let mut h0 = if d0 < 1e-10 || d1 < 1e-10 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    h0 = h0.min(h_max);
+    let mut y1 = [0.0; N];
+    for i in 0..N {
+        y1[i] = y[i] + h0 * f0[i];
+    }
+    let mut f1 = [0.0; N];
+    sys.rhs(t + h0, &y1, &mut f1);
+    *evals += 1;
+    let mut df = [0.0; N];
+    for i in 0..N {
+        df[i] = f1[i] - f0[i];
+    }
+    let d2 = wrms(&df, &w, n) / h0;
+    let dm = d1.max(d2);
+    let h1 = if dm <= 1e-15 {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / dm).powf(1.0 / (p as f64 + 1.0))
+    };
+    (100.0 * h0).min(h1).min(h_max)
+}
