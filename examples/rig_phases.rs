@@ -10,9 +10,10 @@
 //! benchmark: figures for BENCHMARKS.md come from `/usr/bin/time` on the CLI.
 
 use pinsight::cli::common::ParamArgs;
-use pinsight::cli::overlay::{load_and_cycles, load_options, write_outputs};
+use pinsight::cli::overlay::{load_and_cycles, write_outputs};
 use pinsight::overlay::compare::{OverlayOptions, model_params, overlay};
 use pinsight::progress::Progress;
+use pinsight::rig::LoadOptions;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -49,7 +50,7 @@ fn main() -> anyhow::Result<()> {
             .build_global()?;
     }
     let mut clk = Clock(Instant::now(), cpu_s());
-    let lopts = load_options(None, &[])?;
+    let lopts = LoadOptions::default();
     let pargs = ParamArgs::default();
     if !args.iter().any(|a| a == "--no-load-alone") {
         let _ = pinsight::rig::load(&log, &lopts, &Progress::new(0))?;

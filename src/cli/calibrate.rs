@@ -6,7 +6,7 @@
 //! `overlay --params` read.
 
 use super::common::ParamArgs;
-use super::overlay::{load_and_cycles, load_options};
+use super::overlay::load_and_cycles;
 use crate::cli::common::{outln, outp};
 use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport, calibrate};
 use crate::overlay::compare::model_params;
@@ -30,12 +30,8 @@ pub struct Args {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Channel map (TOML) for a rig that names its topics differently.
-    #[arg(long, value_name = "MAP.toml")]
-    pub channels: Option<PathBuf>,
-    /// Override a `rig` metadata key, e.g. --meta laser_zero_mm=10.0 (repeatable).
-    #[arg(long = "meta", value_name = "KEY=VALUE")]
-    pub meta: Vec<String>,
+    #[command(flatten)]
+    pub log_read: super::common::LogReadArgs,
     /// Simulated revolutions per clearance of the grid.
     #[arg(long, default_value_t = 48, value_parser = super::common::bounds::calibrate_revs)]
     pub revs: usize,
@@ -63,7 +59,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         opts.clearance_grid_mm = v;
     }
-    let lopts = load_options(args.channels.as_deref(), &args.meta)?;
+    let lopts = args.log_read.load_options()?;
     let (log, file_params, cs) =
         load_and_cycles(&args.log, &lopts, &args.params, args.points, !args.json)?;
     let (base, notes) = model_params(&log, file_params, &args.params.sets)

@@ -1,4 +1,5 @@
-//! Arguments shared by commands that take mechanism parameters.
+//! Arguments shared by commands: mechanism parameters, how a rig log is
+//! read, standard output.
 
 use crate::model::params::{PARAM_SPECS, Params};
 use anyhow::{Context, bail};
@@ -310,5 +311,37 @@ pub mod bounds {
             assert!(step_s("inf").unwrap_err().contains("not a finite number"));
             assert_eq!(jobs("2"), Ok(2));
         }
+    }
+}
+
+/// How a rig log is read: a channel map for a rig that names its topics
+/// differently, and `rig` metadata overrides (`log`, `overlay`,
+/// `calibrate`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct LogReadArgs {
+    /// Channel map (TOML: a map file, or a session file with a [channels] table).
+    #[arg(long, value_name = "MAP.toml")]
+    pub channels: Option<PathBuf>,
+    /// Override a `rig` metadata key, e.g. --meta laser_zero_mm=10.0 (repeatable).
+    #[arg(long = "meta", value_name = "KEY=VALUE")]
+    pub meta: Vec<String>,
+}
+
+impl LogReadArgs {
+    /// The engine's load options: the channel map read, `--meta` KEY=VALUE
+    /// pairs split (one without `=` is an error naming it).
+    pub fn load_options(&self) -> anyhow::Result<crate::rig::LoadOptions> {
+        let mut opts = crate::rig::LoadOptions::default();
+        if let Some(p) = &self.channels {
+            opts.channel_map = crate::rig::ChannelMap::from_file(p)?;
+        }
+        for kv in &self.meta {
+            let (k, v) = kv
+                .split_once('=')
+                .with_context(|| format!("--meta '{kv}': expected KEY=VALUE"))?;
+            opts.meta_overrides
+                .insert(k.trim().to_string(), v.trim().to_string());
+        }
+        Ok(opts)
     }
 }

@@ -12,8 +12,7 @@ use crate::model::kinematics::Geometry;
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::rig::cycles::{CycleOptions, CycleSource, OffsetEstimate, ValueSource, analyse};
 use crate::rig::summary::{LogSummary, summarize, utc_string};
-use crate::rig::{ChannelMap, LoadOptions, LoadStatus, Severity, load};
-use anyhow::Context;
+use crate::rig::{LoadStatus, Severity, load};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -24,15 +23,11 @@ pub struct Args {
     /// Rig logs (MCAP).
     #[arg(required = true, value_name = "LOG.mcap")]
     pub inputs: Vec<PathBuf>,
-    /// Channel map (TOML: a map file, or a session file with a [channels] table).
-    #[arg(long, value_name = "MAP.toml")]
-    pub channels: Option<PathBuf>,
+    #[command(flatten)]
+    pub log_read: super::common::LogReadArgs,
     /// Print JSON (one object per log; an array for several logs).
     #[arg(long)]
     pub json: bool,
-    /// Override a `rig` metadata key, e.g. --meta standoff_mm=13.9 (repeatable).
-    #[arg(long = "meta", value_name = "KEY=VALUE")]
-    pub meta: Vec<String>,
     /// Mechanism parameters (TOML, as `simulate` reads) for the ideal stroke; default: preset paper.
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
@@ -45,17 +40,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let mut opts = LoadOptions::default();
-    if let Some(p) = &args.channels {
-        opts.channel_map = ChannelMap::from_file(p)?;
-    }
-    for kv in &args.meta {
-        let (k, v) = kv
-            .split_once('=')
-            .with_context(|| format!("--meta '{kv}': expected KEY=VALUE"))?;
-        opts.meta_overrides
-            .insert(k.trim().to_string(), v.trim().to_string());
-    }
+    let opts = args.log_read.load_options()?;
     let params = match &args.params {
         Some(p) => Params::from_toml_file(p).map_err(|e| anyhow::anyhow!("{e}"))?,
         None => Params::paper(),

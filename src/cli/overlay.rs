@@ -17,9 +17,9 @@ pub use crate::overlay::outputs::{
 };
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::rig::cycles::CycleSet;
-use crate::rig::{ChannelMap, LoadOptions, RigLog, load};
+use crate::rig::{LoadOptions, RigLog, load};
 use crate::sim::LevelChoice;
-use anyhow::{Context, anyhow, bail};
+use anyhow::{anyhow, bail};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -42,12 +42,8 @@ pub struct Args {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Channel map (TOML) for a rig that names its topics differently.
-    #[arg(long, value_name = "MAP.toml")]
-    pub channels: Option<PathBuf>,
-    /// Override a `rig` metadata key, e.g. --meta laser_zero_mm=10.0 (repeatable).
-    #[arg(long = "meta", value_name = "KEY=VALUE")]
-    pub meta: Vec<String>,
+    #[command(flatten)]
+    pub log_read: super::common::LogReadArgs,
     /// Simulated revolutions in the predicted ensemble (clearance level).
     #[arg(long, default_value_t = 40, value_parser = super::common::bounds::overlay_revs)]
     pub revs: usize,
@@ -90,22 +86,6 @@ pub fn parse_cycle_range(s: &str) -> anyhow::Result<(u64, u64)> {
         bail!("--cycles '{s}': the range is empty");
     }
     Ok((a, b))
-}
-
-/// Load options from `--channels` and `--meta`.
-pub fn load_options(channels: Option<&Path>, meta: &[String]) -> anyhow::Result<LoadOptions> {
-    let mut opts = LoadOptions::default();
-    if let Some(p) = channels {
-        opts.channel_map = ChannelMap::from_file(p)?;
-    }
-    for kv in meta {
-        let (k, v) = kv
-            .split_once('=')
-            .with_context(|| format!("--meta '{kv}': expected KEY=VALUE"))?;
-        opts.meta_overrides
-            .insert(k.trim().to_string(), v.trim().to_string());
-    }
-    Ok(opts)
 }
 
 /// Loads the log and delimits its cycles with the model's geometry. A log
@@ -170,7 +150,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !(args.speed_threshold >= 0.0) {
         bail!("--speed-threshold must be ≥ 0");
     }
-    let lopts = load_options(args.channels.as_deref(), &args.meta)?;
+    let lopts = args.log_read.load_options()?;
     let (log, file_params, cs) =
         load_and_cycles(&args.log, &lopts, &args.params, args.points, !args.json)?;
     let mut extra_notes = Vec::new();

@@ -138,70 +138,29 @@ impl RigMeta {
         // The model's physical ranges (a log cannot make the solver spin
         // with a clearance of 1e-300 mm): outside them the value is ignored
         // with a finding.
-        let phys = |key: &str, x: f64| match physical_range(key) {
-            Some((lo, hi)) => within(x, lo, hi) || (key == "clearance_mm" && x == 0.0),
-            None => true,
+        let mut ranged = |key: &str, what: &str, unit: &str| {
+            let (lo, hi) = physical_range(key).unwrap_or((f64::MIN, f64::MAX));
+            let zero_ok = key == "clearance_mm";
+            let allowed = format!("{what} within {} … {}{unit}", fmt_num(lo), fmt_num(hi));
+            num(
+                &raw,
+                key,
+                file,
+                findings,
+                |x| within(x, lo, hi) || (zero_ok && x == 0.0),
+                &allowed,
+            )
         };
-        let in_range = |key: &str| match physical_range(key) {
-            Some((lo, hi)) => format!("within {} … {}", fmt_num(lo), fmt_num(hi)),
-            None => String::new(),
+        m.clearance_mm = ranged("clearance_mm", "0 or a clearance", " mm");
+        m.motor_rpm = ranged("motor_rpm", "a speed", " rpm");
+        m.gear_ratio = ranged("gear_ratio", "a ratio", "");
+        m.standoff_mm = ranged("standoff_mm", "a length", " mm");
+        let mut bounded = |key: &str, limit: f64, what: &str| {
+            num(&raw, key, file, findings, |x| x.abs() <= limit, what)
         };
-        m.clearance_mm = num(
-            &raw,
-            "clearance_mm",
-            file,
-            findings,
-            |x| phys("clearance_mm", x),
-            &format!("0 or a clearance {} mm", in_range("clearance_mm")),
-        );
-        m.motor_rpm = num(
-            &raw,
-            "motor_rpm",
-            file,
-            findings,
-            |x| phys("motor_rpm", x),
-            &format!("a speed {} rpm", in_range("motor_rpm")),
-        );
-        m.gear_ratio = num(
-            &raw,
-            "gear_ratio",
-            file,
-            findings,
-            |x| phys("gear_ratio", x),
-            &format!("a ratio {}", in_range("gear_ratio")),
-        );
-        m.standoff_mm = num(
-            &raw,
-            "standoff_mm",
-            file,
-            findings,
-            |x| phys("standoff_mm", x),
-            &format!("a length {} mm", in_range("standoff_mm")),
-        );
-        m.laser_zero_mm = num(
-            &raw,
-            "laser_zero_mm",
-            file,
-            findings,
-            |x| x.abs() <= 1000.0,
-            "a length within ±1000 mm",
-        );
-        m.force_tare_n = num(
-            &raw,
-            "force_tare_n",
-            file,
-            findings,
-            |x| x.abs() <= 1e6,
-            "a force within ±1e6 N",
-        );
-        m.angle_offset_rad = num(
-            &raw,
-            "angle_offset_rad",
-            file,
-            findings,
-            |x| x.abs() <= 100.0,
-            "an angle within ±100 rad",
-        );
+        m.laser_zero_mm = bounded("laser_zero_mm", 1000.0, "a length within ±1000 mm");
+        m.force_tare_n = bounded("force_tare_n", 1e6, "a force within ±1e6 N");
+        m.angle_offset_rad = bounded("angle_offset_rad", 100.0, "an angle within ±100 rad");
         if let Some(mat) = &m.material {
             if !MATERIALS.contains(&mat.as_str()) {
                 findings.push(Finding::new(

@@ -514,23 +514,9 @@ impl Scene {
                     }
                     let ar = area / tip_area_px;
                     let off = p.offset_mm.0.hypot(p.offset_mm.1);
-                    let defect = if ar < ta_lo || ar > ta_hi {
-                        PinStatus::Damaged
-                    } else if off > tol.position_mm {
-                        PinStatus::Bent
-                    } else {
-                        PinStatus::Ok
-                    };
-                    truth_pins.push(TruthPin {
-                        row: p.row,
-                        col: p.col,
-                        x_px: Some(cx),
-                        y_px: Some(cy),
-                        defect,
-                        height_mm: None,
-                        area_ratio: Some(ar),
-                        offset_mm: Some(off),
-                    });
+                    let limits = ([ta_lo, ta_hi], tol.position_mm);
+                    let pos = (p.row, p.col);
+                    truth_pins.push(TruthPin::top(pos, (cx, cy), ar, off, limits.0, limits.1));
                 }
                 for e in &self.extras {
                     let s = self.extra_shape(e);
@@ -582,17 +568,8 @@ impl Scene {
                     let bar = Shape::Poly(pts.iter().map(|(a, b)| sim.apply(*a, *b)).collect());
                     paint(&mut img, &bar, solid, 1.0);
                     let (tx, ty) = sim.apply(u, top);
-                    let defect = PinStatus::side(tol, p.offset_mm.0, p.height_mm);
-                    truth_pins.push(TruthPin {
-                        row: p.row,
-                        col: p.col,
-                        x_px: Some(tx),
-                        y_px: Some(ty),
-                        defect,
-                        height_mm: Some(p.height_mm),
-                        area_ratio: None,
-                        offset_mm: Some(p.offset_mm.0.abs()),
-                    });
+                    let (pos, tip) = ((p.row, p.col), (tx, ty));
+                    truth_pins.push(TruthPin::side(pos, tip, p.height_mm, p.offset_mm.0, tol));
                 }
                 for e in &self.extras {
                     let s = self.extra_shape(e);

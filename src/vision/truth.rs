@@ -3,6 +3,7 @@
 //! per-pin status agreement, centre errors, extras found. Used by the tests,
 //! the methods lab and CI jobs that check fixture data.
 
+use super::recipe::Tolerance;
 use super::result::{Inspection, PinStatus, Verdict};
 use serde::{Deserialize, Serialize};
 
@@ -23,6 +24,59 @@ pub struct TruthPin {
 }
 
 impl TruthPin {
+    /// A top-view tip as a generator painted it: its centre (px), tip area
+    /// over the nominal and offset from nominal (mm); its defect by the
+    /// recipe's limits — an area outside `tip_area` is damaged, an offset
+    /// beyond `position_mm` bent.
+    pub fn top(
+        (row, col): (u32, u32),
+        centre_px: (f64, f64),
+        area_ratio: f64,
+        offset_mm: f64,
+        tip_area: [f64; 2],
+        position_mm: f64,
+    ) -> TruthPin {
+        let defect = if area_ratio < tip_area[0] || area_ratio > tip_area[1] {
+            PinStatus::Damaged
+        } else if offset_mm > position_mm {
+            PinStatus::Bent
+        } else {
+            PinStatus::Ok
+        };
+        TruthPin {
+            row,
+            col,
+            x_px: Some(centre_px.0),
+            y_px: Some(centre_px.1),
+            defect,
+            height_mm: None,
+            area_ratio: Some(area_ratio),
+            offset_mm: Some(offset_mm),
+        }
+    }
+
+    /// A side-view pin as a generator painted it: its tip point (px),
+    /// height above the housing and offset along the row (mm); its defect
+    /// as [`PinStatus::side`] judges it.
+    pub fn side(
+        (row, col): (u32, u32),
+        tip_px: (f64, f64),
+        height_mm: f64,
+        offset_mm: f64,
+        tol: &Tolerance,
+    ) -> TruthPin {
+        TruthPin {
+            row,
+            col,
+            x_px: Some(tip_px.0),
+            y_px: Some(tip_px.1),
+            defect: PinStatus::side(tol, offset_mm, height_mm),
+            height_mm: Some(height_mm),
+            area_ratio: None,
+            offset_mm: Some(offset_mm.abs()),
+        }
+    }
+
     /// A position with no pin.
     pub fn missing(row: u32, col: u32) -> TruthPin {
         TruthPin {

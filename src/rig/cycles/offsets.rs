@@ -71,40 +71,21 @@ pub(super) fn laser_zero(
         ),
         _ => "not estimable".into(),
     };
-    if let Some(v) = ctx.opts.laser_zero_mm {
-        lz.applied = v;
-        lz.source = ValueSource::Override;
-        lz.note = format!("session override; estimate {est_text}");
-    } else if let Some(v) = ctx.log.meta.laser_zero_mm {
-        lz.applied = v;
-        lz.source = ValueSource::Metadata;
-        lz.note = format!("metadata laser_zero_mm; estimate {est_text}");
-        if let (Some(e), Some(s)) = (lz.estimate, lz.sigma) {
-            let allow = 3.0 * s + ctx.log.meta.clearance_mm.unwrap_or(0.0);
-            if (e - v).abs() > allow {
-                findings.push(Finding::new(
-                        Severity::Warning,
-                        FindingCode::OffsetEstimated,
-                        ctx.file,
-                        Some(&label),
-                        None,
-                        format!("metadata laser_zero_mm = {} mm disagrees with the estimate {est_text}; the metadata value is used", crate::fmt::plain(v)),
-                    ));
-            }
-        }
-    } else if let Some(e) = lz.estimate {
-        lz.applied = e;
-        lz.source = ValueSource::Estimated;
-        lz.note = format!("no laser_zero_mm in the metadata: estimate {est_text} applied");
-        findings.push(Finding::new(
-                Severity::Info,
-                FindingCode::OffsetEstimated,
-                ctx.file,
-                Some(&label),
-                None,
-                format!("laser zero mark (stroke at which the laser reads 0) estimated at {est_text}; applied since the metadata has no laser_zero_mm"),
-            ));
-    }
+    let words = Wording {
+        key: "laser_zero_mm",
+        unit: "mm",
+        kept: "",
+        versus: "the estimate",
+        estimated_note: format!("no laser_zero_mm in the metadata: estimate {est_text} applied"),
+        estimated_finding: format!(
+            "laser zero mark (stroke at which the laser reads 0) estimated at {est_text}; applied since the metadata has no laser_zero_mm"
+        ),
+    };
+    let clearance = ctx.log.meta.clearance_mm.unwrap_or(0.0);
+    let given = (ctx.opts.laser_zero_mm, ctx.log.meta.laser_zero_mm);
+    let at = (label.as_str(), ctx.file);
+    let allow = |s: f64| 3.0 * s + clearance;
+    apply_source(&mut lz, given, allow, &est_text, &words, at, findings);
     set.offsets.laser_zero_mm = lz;
 }
 
@@ -168,43 +149,27 @@ pub(super) fn force_tare(
         ),
         _ => "not estimable".into(),
     };
-    let mut tare_line: Option<(f64, f64)> = None;
-    if let Some(v) = ctx.opts.force_tare_n {
-        ft.applied = v;
-        ft.source = ValueSource::Override;
-        ft.note = format!("session override (constant); estimate {est_text}");
-    } else if let Some(v) = ctx.log.meta.force_tare_n {
-        ft.applied = v;
-        ft.source = ValueSource::Metadata;
-        ft.note = format!("metadata force_tare_n (constant); estimate {est_text}");
-        if let (Some(e), Some(s)) = (ft.estimate, ft.sigma) {
-            if (e - v).abs() > (3.0 * s).max(0.02) {
-                findings.push(Finding::new(
-                        Severity::Warning,
-                        FindingCode::OffsetEstimated,
-                        ctx.file,
-                        Some(&label),
-                        None,
-                        format!("metadata force_tare_n = {} N disagrees with the off-part reading {est_text}; the metadata value is used", crate::fmt::plain(v)),
-                    ));
-            }
-        }
-    } else if let Some(e) = ft.estimate {
-        ft.applied = e;
-        ft.source = ValueSource::Estimated;
-        tare_line = fit.map(|lf| (lf.a, lf.b));
-        ft.note = format!(
+    let words = Wording {
+        key: "force_tare_n",
+        unit: "N",
+        kept: " (constant)",
+        versus: "the off-part reading",
+        estimated_note: format!(
             "no force_tare_n in the metadata: the fitted tare line is subtracted cycle by cycle; estimate {est_text}"
-        );
-        findings.push(Finding::new(
-                Severity::Info,
-                FindingCode::OffsetEstimated,
-                ctx.file,
-                Some(&label),
-                None,
-                format!("force tare estimated at {est_text}; subtracted (linear in time) since the metadata has no force_tare_n"),
-            ));
-    }
+        ),
+        estimated_finding: format!(
+            "force tare estimated at {est_text}; subtracted (linear in time) since the metadata has no force_tare_n"
+        ),
+    };
+    let given = (ctx.opts.force_tare_n, ctx.log.meta.force_tare_n);
+    let at = (label.as_str(), ctx.file);
+    let allow = |s: f64| (3.0 * s).max(0.02);
+    let estimated = apply_source(&mut ft, given, allow, &est_text, &words, at, findings);
+    let tare_line: Option<(f64, f64)> = if estimated {
+        fit.map(|lf| (lf.a, lf.b))
+    } else {
+        None
+    };
     // Apply the tare to the grids.
     for (g, c) in raw_force.iter_mut().zip(&set.cycles) {
         let tare = match tare_line {
@@ -216,4 +181,71 @@ pub(super) fn force_tare(
         }
     }
     set.offsets.force_tare_n = ft;
+}
+
+/// How an offset's source is told: its metadata key and unit, what the
+/// metadata is kept as, what it is compared with, and the note and finding
+/// when the estimate is applied.
+struct Wording {
+    key: &'static str,
+    unit: &'static str,
+    kept: &'static str,
+    versus: &'static str,
+    estimated_note: String,
+    estimated_finding: String,
+}
+
+/// Sets the applied value of `est` from the first source that has one: a
+/// session override (`given.0`), the metadata (`given.1`, with a warning
+/// when the estimate disagrees by more than `allow(σ)`), else the estimate
+/// itself (said with an info finding). `at` is the (channel label, file)
+/// the findings name. Returns whether the estimate was applied.
+fn apply_source(
+    est: &mut OffsetEstimate,
+    given: (Option<f64>, Option<f64>),
+    allow: impl Fn(f64) -> f64,
+    est_text: &str,
+    words: &Wording,
+    at: (&str, &str),
+    findings: &mut Vec<Finding>,
+) -> bool {
+    let (key, unit, kept) = (words.key, words.unit, words.kept);
+    let finding = |severity, message| {
+        Finding::new(
+            severity,
+            FindingCode::OffsetEstimated,
+            at.1,
+            Some(at.0),
+            None,
+            message,
+        )
+    };
+    if let Some(v) = given.0 {
+        est.applied = v;
+        est.source = ValueSource::Override;
+        est.note = format!("session override{kept}; estimate {est_text}");
+    } else if let Some(v) = given.1 {
+        est.applied = v;
+        est.source = ValueSource::Metadata;
+        est.note = format!("metadata {key}{kept}; estimate {est_text}");
+        if let (Some(e), Some(s)) = (est.estimate, est.sigma) {
+            if (e - v).abs() > allow(s) {
+                findings.push(finding(
+                    Severity::Warning,
+                    format!(
+                        "metadata {key} = {} {unit} disagrees with {} {est_text}; the metadata value is used",
+                        crate::fmt::plain(v),
+                        words.versus
+                    ),
+                ));
+            }
+        }
+    } else if let Some(e) = est.estimate {
+        est.applied = e;
+        est.source = ValueSource::Estimated;
+        est.note = words.estimated_note.clone();
+        findings.push(finding(Severity::Info, words.estimated_finding.clone()));
+        return true;
+    }
+    false
 }
