@@ -83,37 +83,23 @@ fn num(
     what: &str,
 ) -> Option<f64> {
     let v = raw.get(key)?;
-    match v.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && check(x) => Some(x),
-        Ok(_) => {
-            findings.push(Finding::new(
-                Severity::Warning,
-                FindingCode::Metadata,
-                file,
-                None,
-                None,
-                format!(
-                    "metadata 'rig': {key} = '{}' is not {what}; ignored",
-                    short(v)
-                ),
-            ));
-            None
-        }
-        Err(_) => {
-            findings.push(Finding::new(
-                Severity::Warning,
-                FindingCode::Metadata,
-                file,
-                None,
-                None,
-                format!(
-                    "metadata 'rig': {key} = '{}' is not a number; ignored",
-                    short(v)
-                ),
-            ));
-            None
-        }
-    }
+    let not = match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && check(x) => return Some(x),
+        Ok(_) => what,
+        Err(_) => "a number",
+    };
+    findings.push(Finding::new(
+        Severity::Warning,
+        FindingCode::Metadata,
+        file,
+        None,
+        None,
+        format!(
+            "metadata 'rig': {key} = '{}' is not {not}; ignored",
+            short(v)
+        ),
+    ));
+    None
 }
 
 impl RigMeta {

@@ -194,11 +194,7 @@ pub fn robust_similarity(
     Some(RobustFit {
         sim,
         inlier,
-        rms_px: if k > 0 {
-            (ss / k as f64).sqrt()
-        } else {
-            f64::NAN
-        },
+        rms_px: rms_of(ss, k),
         sigma_px: sigma,
     })
 }
@@ -317,12 +313,18 @@ pub fn robust_line(pts: &[(f64, f64)], tol: f64) -> Option<LineFit> {
     Some(LineFit {
         line,
         inlier,
-        rms: if k > 0 {
-            (ss / k as f64).sqrt()
-        } else {
-            f64::NAN
-        },
+        rms: rms_of(ss, k),
     })
+}
+
+/// The root mean square of `k` squared residuals summing to `ss` (NaN for
+/// none).
+fn rms_of(ss: f64, k: usize) -> f64 {
+    if k > 0 {
+        (ss / k as f64).sqrt()
+    } else {
+        f64::NAN
+    }
 }
 
 #[cfg(test)]

@@ -91,19 +91,7 @@ impl<'a, P: Px> Plane<'a, P> {
 
     /// Bilinear sample at a sub-pixel position (clamped to the image).
     pub fn bilinear(&self, x: f64, y: f64) -> f32 {
-        let xm = (self.w - 1) as f64;
-        let ym = (self.h - 1) as f64;
-        let x = x.clamp(0.0, xm);
-        let y = y.clamp(0.0, ym);
-        let x0 = x.floor() as usize;
-        let y0 = y.floor() as usize;
-        let x1 = (x0 + 1).min(self.w - 1);
-        let y1 = (y0 + 1).min(self.h - 1);
-        let fx = (x - x0 as f64) as f32;
-        let fy = (y - y0 as f64) as f32;
-        let a = self.at(x0, y0) * (1.0 - fx) + self.at(x1, y0) * fx;
-        let b = self.at(x0, y1) * (1.0 - fx) + self.at(x1, y1) * fx;
-        a * (1.0 - fy) + b * fy
+        bilinear((self.w, self.h), x, y, |x, y| self.at(x, y))
     }
 }
 
@@ -237,18 +225,27 @@ impl Coarse {
 
     /// Bilinear sample (clamped).
     pub fn bilinear(&self, x: f64, y: f64) -> f32 {
-        let x = x.clamp(0.0, (self.w - 1) as f64);
-        let y = y.clamp(0.0, (self.h - 1) as f64);
-        let x0 = x.floor() as usize;
-        let y0 = y.floor() as usize;
-        let x1 = (x0 + 1).min(self.w - 1);
-        let y1 = (y0 + 1).min(self.h - 1);
-        let fx = (x - x0 as f64) as f32;
-        let fy = (y - y0 as f64) as f32;
-        let a = self.at(x0, y0) * (1.0 - fx) + self.at(x1, y0) * fx;
-        let b = self.at(x0, y1) * (1.0 - fx) + self.at(x1, y1) * fx;
-        a * (1.0 - fy) + b * fy
+        bilinear((self.w, self.h), x, y, |x, y| self.at(x, y))
     }
+}
+
+/// Bilinear sample of a w×h grid read through `at` at a sub-pixel
+/// position, clamped to the grid (the one interpolation of full planes
+/// and coarse pyramids).
+#[inline(always)]
+fn bilinear(size: (usize, usize), x: f64, y: f64, at: impl Fn(usize, usize) -> f32) -> f32 {
+    let (w, h) = size;
+    let x = x.clamp(0.0, (w - 1) as f64);
+    let y = y.clamp(0.0, (h - 1) as f64);
+    let x0 = x.floor() as usize;
+    let y0 = y.floor() as usize;
+    let x1 = (x0 + 1).min(w - 1);
+    let y1 = (y0 + 1).min(h - 1);
+    let fx = (x - x0 as f64) as f32;
+    let fy = (y - y0 as f64) as f32;
+    let a = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
+    let b = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
+    a * (1.0 - fy) + b * fy
 }
 
 #[cfg(test)]

@@ -156,35 +156,20 @@ pub fn to_gray(img: DynamicImage) -> Gray {
             height: h,
             data: super::gray::GrayData::U16(b.pixels().map(|p| p.0[0]).collect()),
         },
-        DynamicImage::ImageRgb8(b) => rgb16(
-            &mut b
-                .pixels()
-                .map(|p| [p.0[0] as f32, p.0[1] as f32, p.0[2] as f32]),
-            257.0,
-        ),
-        DynamicImage::ImageRgba8(b) => rgb16(
-            &mut b
-                .pixels()
-                .map(|p| [p.0[0] as f32, p.0[1] as f32, p.0[2] as f32]),
-            257.0,
-        ),
-        DynamicImage::ImageRgb16(b) => rgb16(
-            &mut b
-                .pixels()
-                .map(|p| [p.0[0] as f32, p.0[1] as f32, p.0[2] as f32]),
-            1.0,
-        ),
-        DynamicImage::ImageRgba16(b) => rgb16(
-            &mut b
-                .pixels()
-                .map(|p| [p.0[0] as f32, p.0[1] as f32, p.0[2] as f32]),
-            1.0,
-        ),
+        DynamicImage::ImageRgb8(b) => rgb16(&mut b.pixels().map(|p| rgb_f32(p.0)), 257.0),
+        DynamicImage::ImageRgba8(b) => rgb16(&mut b.pixels().map(|p| rgb_f32(p.0)), 257.0),
+        DynamicImage::ImageRgb16(b) => rgb16(&mut b.pixels().map(|p| rgb_f32(p.0)), 1.0),
+        DynamicImage::ImageRgba16(b) => rgb16(&mut b.pixels().map(|p| rgb_f32(p.0)), 1.0),
         other => {
             let b = other.to_rgb32f();
             rgb16(&mut b.pixels().map(|p| [p.0[0], p.0[1], p.0[2]]), 65535.0)
         }
     }
+}
+
+/// The first three channels of an RGB(A) pixel of any integer depth.
+fn rgb_f32<T: Copy + Into<f32>, const C: usize>(p: [T; C]) -> [f32; 3] {
+    [p[0].into(), p[1].into(), p[2].into()]
 }
 
 #[cfg(test)]

@@ -303,36 +303,20 @@ pub fn measure_blob_with<P: Px>(
     for _ in 0..dilate {
         let mut next: Vec<usize> = Vec::new();
         for &i in &frontier {
-            let (x, y) = ((i % rw) as i64, (i / rw) as i64);
-            for dy in -1..=1i64 {
-                for dx in -1..=1i64 {
-                    let (nx, ny) = (x + dx, y + dy);
-                    if nx < 0 || ny < 0 || nx >= rw as i64 || ny >= rh as i64 {
-                        continue;
-                    }
-                    let j = ny as usize * rw + nx as usize;
-                    if win[j] == 0 {
-                        win[j] = 2;
-                        veff[j] = f32::NEG_INFINITY;
-                        next.push(j);
-                    }
+            for j in block3x3(i, rw, rh) {
+                if win[j] == 0 {
+                    win[j] = 2;
+                    veff[j] = f32::NEG_INFINITY;
+                    next.push(j);
                 }
             }
         }
         // Effective values of the new ring from the previous ring.
         for &j in &next {
-            let (x, y) = ((j % rw) as i64, (j / rw) as i64);
             let mut inner = f32::NEG_INFINITY;
-            for dy in -1..=1i64 {
-                for dx in -1..=1i64 {
-                    let (nx, ny) = (x + dx, y + dy);
-                    if nx < 0 || ny < 0 || nx >= rw as i64 || ny >= rh as i64 {
-                        continue;
-                    }
-                    let k = ny as usize * rw + nx as usize;
-                    if win[k] == 1 {
-                        inner = inner.max(veff[k]);
-                    }
+            for k in block3x3(j, rw, rh) {
+                if win[k] == 1 {
+                    inner = inner.max(veff[k]);
                 }
             }
             veff[j] = v[j].min(inner);
@@ -491,5 +475,18 @@ pub fn measure_blob_with<P: Px>(
         noise,
         energy,
         edge_sigma,
+    })
+}
+
+/// The indices of the 3×3 block around pixel `i` of a `rw`×`rh` window
+/// (the pixel itself included; cut at the window's edges), row by row.
+fn block3x3(i: usize, rw: usize, rh: usize) -> impl Iterator<Item = usize> {
+    let (x, y) = ((i % rw) as i64, (i / rw) as i64);
+    (-1..=1i64).flat_map(move |dy| {
+        (-1..=1i64).filter_map(move |dx| {
+            let (nx, ny) = (x + dx, y + dy);
+            let inside = nx >= 0 && ny >= 0 && nx < rw as i64 && ny < rh as i64;
+            inside.then(|| ny as usize * rw + nx as usize)
+        })
     })
 }

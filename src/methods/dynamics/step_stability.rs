@@ -179,15 +179,8 @@ pub(super) fn classify(r: &SimResult, reference: &SimResult, clearance: f64) -> 
     if s.n_impacts < rs.n_impacts {
         return Outcome::MissedImpacts;
     }
-    let stroke_err = match (&r.curves, &reference.curves) {
-        (Some(a), Some(b)) => a
-            .stroke_mm
-            .iter()
-            .zip(&b.stroke_mm)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max),
-        _ => f64::INFINITY,
-    };
+    let stroke_err =
+        super::work_precision::max_stroke_diff_mm(r, reference).unwrap_or(f64::INFINITY);
     let force_err = (s.peak_contact_force_n - rs.peak_contact_force_n).abs()
         / rs.peak_contact_force_n.max(1e-300);
     if s.n_impacts == rs.n_impacts && force_err < 0.01 && stroke_err < 1e-3 {

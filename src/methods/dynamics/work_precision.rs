@@ -56,6 +56,19 @@ pub(super) fn window_opts(method: Method, rtol: f64, step: Option<f64>) -> SimOp
     }
 }
 
+/// The largest stroke difference (mm) between two runs' curves on the
+/// same output grid; `None` when either run has no curves.
+pub(super) fn max_stroke_diff_mm(a: &SimResult, b: &SimResult) -> Option<f64> {
+    let (a, b) = (a.curves.as_ref()?, b.curves.as_ref()?);
+    Some(
+        a.stroke_mm
+            .iter()
+            .zip(&b.stroke_mm)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max),
+    )
+}
+
 pub(super) fn compare(
     scene: &str,
     r: &SimResult,
@@ -65,15 +78,7 @@ pub(super) fn compare(
 ) -> WpPoint {
     let s = &r.summary;
     let rs = &reference.summary;
-    let stroke_err = match (&r.curves, &reference.curves) {
-        (Some(a), Some(b)) => a
-            .stroke_mm
-            .iter()
-            .zip(&b.stroke_mm)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max),
-        _ => f64::NAN,
-    };
+    let stroke_err = max_stroke_diff_mm(r, reference).unwrap_or(f64::NAN);
     let on = |r: &SimResult| -> Vec<f64> {
         r.events.iter().filter(|e| e.onset).map(|e| e.t_s).collect()
     };

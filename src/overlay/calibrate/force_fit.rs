@@ -46,15 +46,7 @@ pub(super) fn force_fit(
     v1: f64,
 ) -> (f64, Vec<f64>, usize) {
     let k = knots_mm.len();
-    let cd = |v: f64| {
-        if v < v0 {
-            0.0
-        } else if v > v1 {
-            1.0
-        } else {
-            (v - v0) / (v1 - v0)
-        }
-    };
+    let cd = |v: f64| crate::model::contact::smoothing(v, v0, v1);
     // Hat basis on the knots; beyond the last knot the last value holds.
     let basis = |d: f64, out: &mut [f64]| {
         out.iter_mut().for_each(|x| *x = 0.0);

@@ -204,10 +204,7 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
             // A rig sampling in step with the crank sees the same encoder
             // counts at every mark, so the spread can be ~0: the encoder's
             // quantisation (Δ/√12) is the floor of the uncertainty.
-            let quantum = set
-                .crank
-                .encoder_counts
-                .map_or(0.0, |n| TAU / n as f64 / 12f64.sqrt());
+            let quantum = set.crank.encoder_quantum_rad();
             let stat = if close.len() > 1 {
                 s / (close.len() as f64).sqrt()
             } else {
@@ -247,10 +244,7 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
                     })
                     .collect();
                 let (_, s) = mean_std(&parts);
-                let quantum = set
-                    .crank
-                    .encoder_counts
-                    .map_or(0.0, |n| TAU / n as f64 / 12f64.sqrt());
+                let quantum = set.crank.encoder_quantum_rad();
                 ao.estimate = Some(wrap_pi(phi));
                 ao.sigma = Some((s / (parts.len().max(1) as f64).sqrt()).max(quantum));
                 est_method = "from the displacement signal (phase of the best fit to the ideal stroke; biased by the sensor lag, ω·τ)";

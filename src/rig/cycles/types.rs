@@ -242,6 +242,17 @@ pub struct CrankInfo {
     pub motor_rpm_setpoint: Option<f64>,
 }
 
+impl CrankInfo {
+    /// The σ of an encoder's quantisation (Δ/√12, rad; 0 without an
+    /// encoder lattice): a rig sampling in step with the crank sees the
+    /// same counts at every mark, so this is the floor of an angle's
+    /// uncertainty.
+    pub fn encoder_quantum_rad(&self) -> f64 {
+        self.encoder_counts
+            .map_or(0.0, |n| std::f64::consts::TAU / n as f64 / 12f64.sqrt())
+    }
+}
+
 /// The cycles of a run.
 #[derive(Debug, Clone, Serialize)]
 pub struct CycleSet {

@@ -25,6 +25,16 @@ pub struct ItemOutcome {
     pub problem: Option<ItemProblem>,
 }
 
+impl ItemOutcome {
+    /// An item whose messages are lost, with the reason.
+    fn lost(code: FindingCode, text: String) -> Self {
+        ItemOutcome {
+            problem: problem(code, Severity::DataLoss, true, text),
+            ..Default::default()
+        }
+    }
+}
+
 /// Per-thread reusable decompression state.
 #[derive(Default)]
 pub struct Scratch {
@@ -127,18 +137,13 @@ pub fn decode_item<V: RecordVisitor>(
         } => {
             let data = &b[*data_start as usize..(*data_start + *data_len) as usize];
             if *uncompressed_size > opts.record_length_limit {
-                return ItemOutcome {
-                    problem: problem(
-                        FindingCode::RecordTooLarge,
-                        Severity::DataLoss,
-                        true,
-                        format!(
-                            "chunk at byte {pos} declares {uncompressed_size} uncompressed bytes, above the record-length limit of {} bytes; chunk skipped",
-                            opts.record_length_limit
-                        ),
+                return ItemOutcome::lost(
+                    FindingCode::RecordTooLarge,
+                    format!(
+                        "chunk at byte {pos} declares {uncompressed_size} uncompressed bytes, above the record-length limit of {} bytes; chunk skipped",
+                        opts.record_length_limit
                     ),
-                    ..Default::default()
-                };
+                );
             }
             let content: &[u8] = match compression.as_str() {
                 "" => &data[..data.len().min(*uncompressed_size as usize)],
@@ -155,17 +160,10 @@ pub fn decode_item<V: RecordVisitor>(
                                 None => match zstd::bulk::Decompressor::new() {
                                     Ok(z) => scratch.zstd.insert(z),
                                     Err(e) => {
-                                        return ItemOutcome {
-                                            problem: problem(
-                                                FindingCode::ChunkDecompress,
-                                                Severity::DataLoss,
-                                                true,
-                                                format!(
-                                                    "chunk at byte {pos}: zstd unavailable: {e}"
-                                                ),
-                                            ),
-                                            ..Default::default()
-                                        };
+                                        return ItemOutcome::lost(
+                                            FindingCode::ChunkDecompress,
+                                            format!("chunk at byte {pos}: zstd unavailable: {e}"),
+                                        );
                                     }
                                 },
                             };
@@ -186,64 +184,44 @@ pub fn decode_item<V: RecordVisitor>(
                     };
                     if let Err(e) = res {
                         if *complete {
-                            return ItemOutcome {
-                                problem: problem(
-                                    FindingCode::ChunkDecompress,
-                                    Severity::DataLoss,
-                                    true,
-                                    format!(
-                                        "chunk at byte {pos} ({compression}) cannot be decompressed ({e}); its messages are lost"
-                                    ),
+                            return ItemOutcome::lost(
+                                FindingCode::ChunkDecompress,
+                                format!(
+                                    "chunk at byte {pos} ({compression}) cannot be decompressed ({e}); its messages are lost"
                                 ),
-                                ..Default::default()
-                            };
+                            );
                         }
                     }
                     &scratch.buf
                 }
                 other => {
-                    return ItemOutcome {
-                        problem: problem(
-                            FindingCode::UnknownCompression,
-                            Severity::DataLoss,
-                            true,
-                            format!(
-                                "chunk at byte {pos} uses compression '{other}', which pinsight cannot decode (zstd, lz4 or none); its messages are lost"
-                            ),
+                    return ItemOutcome::lost(
+                        FindingCode::UnknownCompression,
+                        format!(
+                            "chunk at byte {pos} uses compression '{other}', which pinsight cannot decode (zstd, lz4 or none); its messages are lost"
                         ),
-                        ..Default::default()
-                    };
+                    );
                 }
             };
             if *complete {
                 if content.len() as u64 != *uncompressed_size {
-                    return ItemOutcome {
-                        problem: problem(
-                            FindingCode::ChunkDecompress,
-                            Severity::DataLoss,
-                            true,
-                            format!(
-                                "chunk at byte {pos} decompresses to {} bytes instead of the declared {uncompressed_size}; its messages are lost",
-                                content.len()
-                            ),
+                    return ItemOutcome::lost(
+                        FindingCode::ChunkDecompress,
+                        format!(
+                            "chunk at byte {pos} decompresses to {} bytes instead of the declared {uncompressed_size}; its messages are lost",
+                            content.len()
                         ),
-                        ..Default::default()
-                    };
+                    );
                 }
                 if opts.validate_crcs && *crc != 0 {
                     let calculated = crc32fast::hash(content);
                     if calculated != *crc {
-                        return ItemOutcome {
-                            problem: problem(
-                                FindingCode::BadChunkCrc,
-                                Severity::DataLoss,
-                                true,
-                                format!(
-                                    "chunk at byte {pos}: CRC mismatch (stored {crc:08x}, computed {calculated:08x}); the chunk's messages are dropped"
-                                ),
+                        return ItemOutcome::lost(
+                            FindingCode::BadChunkCrc,
+                            format!(
+                                "chunk at byte {pos}: CRC mismatch (stored {crc:08x}, computed {calculated:08x}); the chunk's messages are dropped"
                             ),
-                            ..Default::default()
-                        };
+                        );
                     }
                 }
             }
@@ -337,19 +315,14 @@ where
                 *scratch = Scratch::default();
                 (
                     make(item),
-                    ItemOutcome {
-                        problem: problem(
-                            FindingCode::InternalError,
-                            Severity::DataLoss,
-                            true,
-                            format!(
-                                "internal error while decoding the item at byte {} ({}); item skipped — please report this file",
-                                item.offset,
-                                panic_text(&e)
-                            ),
+                    ItemOutcome::lost(
+                        FindingCode::InternalError,
+                        format!(
+                            "internal error while decoding the item at byte {} ({}); item skipped — please report this file",
+                            item.offset,
+                            panic_text(&e)
                         ),
-                        ..Default::default()
-                    },
+                    ),
                 )
             }
         }

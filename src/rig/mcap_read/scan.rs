@@ -70,39 +70,30 @@ impl<'a> Walker<'a> {
         if def.id == 0 {
             return;
         }
-        if let Some(old) = self.scan.schemas.get(&def.id) {
-            if *old != def {
-                self.finding(
-                    Severity::Warning,
-                    FindingCode::ChannelConflict,
-                    Some(Place::byte(pos)),
-                    format!(
-                        "schema id {} redefined at byte {pos} ('{}' vs '{}'); the first definition is used",
-                        def.id, old.name, def.name
-                    ),
-                );
-            }
-            return;
-        }
-        self.scan.schemas.insert(def.id, def);
+        let (id, name) = (def.id, def.name.clone());
+        let conflict = keep_first(&mut self.scan.schemas, id, def, |d| d.name.clone());
+        self.redefined("schema", id, pos, conflict, &name);
     }
 
     fn add_channel(&mut self, def: ChannelDef, pos: u64) {
-        if let Some(old) = self.scan.channels.get(&def.id) {
-            if *old != def {
-                self.finding(
-                    Severity::Warning,
-                    FindingCode::ChannelConflict,
-                    Some(Place::byte(pos)),
-                    format!(
-                        "channel id {} redefined at byte {pos} ('{}' vs '{}'); the first definition is used",
-                        def.id, old.topic, def.topic
-                    ),
-                );
-            }
-            return;
+        let (id, topic) = (def.id, def.topic.clone());
+        let conflict = keep_first(&mut self.scan.channels, id, def, |d| d.topic.clone());
+        self.redefined("channel", id, pos, conflict, &topic);
+    }
+
+    /// Warns of a schema or channel id defined again differently (`old`
+    /// names the first definition, which is kept).
+    fn redefined(&mut self, what: &str, id: u16, pos: u64, old: Option<String>, new: &str) {
+        if let Some(old) = old {
+            self.finding(
+                Severity::Warning,
+                FindingCode::ChannelConflict,
+                Some(Place::byte(pos)),
+                format!(
+                    "{what} id {id} redefined at byte {pos} ('{old}' vs '{new}'); the first definition is used"
+                ),
+            );
         }
-        self.scan.channels.insert(def.id, def);
     }
 
     /// Handles one record of the data or summary section at absolute offset `pos`.
@@ -627,4 +618,23 @@ pub trait RecordVisitor {
     fn channel(&mut self, def: ChannelDef);
     /// One message: channel id, log_time, sequence and payload.
     fn message(&mut self, channel_id: u16, log_time: u64, data: &[u8]);
+}
+
+/// Records `def` under `id` unless the id is already defined: the first
+/// definition wins. Returns the first one's name (by `name`) when the new
+/// one differs from it.
+fn keep_first<V: PartialEq>(
+    map: &mut std::collections::BTreeMap<u16, V>,
+    id: u16,
+    def: V,
+    name: impl Fn(&V) -> String,
+) -> Option<String> {
+    match map.get(&id) {
+        Some(old) if *old != def => Some(name(old)),
+        Some(_) => None,
+        None => {
+            map.insert(id, def);
+            None
+        }
+    }
 }

@@ -40,15 +40,9 @@ impl IdealTruth {
     }
 }
 
-pub(super) fn cd(v: f64, v0: f64, v1: f64) -> f64 {
-    if v < v0 {
-        0.0
-    } else if v > v1 {
-        1.0
-    } else {
-        (v - v0) / (v1 - v0)
-    }
-}
+/// The process law's velocity ramp: the model's c_d (0 below v0, 1 above
+/// v1), so the synthetic truth and the model share one definition.
+pub(super) use crate::model::contact::smoothing as cd;
 
 impl Truth for IdealTruth {
     fn eval(&self, _t: f64, theta2: f64, omega2: f64) -> (f64, f64) {
