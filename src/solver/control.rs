@@ -7,6 +7,47 @@
 
 use super::{Stats, StepError, StepperConfig, System, Tolerance, wrms};
 
+/// Where a stepper is: the current point and its derivative, and the start
+/// of the last step (the interval its dense output covers).
+#[derive(Debug, Clone)]
+pub struct Position<const N: usize> {
+    pub t: f64,
+    pub t_prev: f64,
+    pub y: [f64; N],
+    pub y_prev: [f64; N],
+    /// f(t, y).
+    pub f: [f64; N],
+}
+
+impl<const N: usize> Position<N> {
+    pub(crate) fn new() -> Self {
+        Position {
+            t: 0.0,
+            t_prev: 0.0,
+            y: [0.0; N],
+            y_prev: [0.0; N],
+            f: [0.0; N],
+        }
+    }
+
+    /// Restarts at (t, y) with no last step; f(t, y) is evaluated and
+    /// counted.
+    pub(crate) fn restart<S: System<N>>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        y: [f64; N],
+        stats: &mut Stats,
+    ) {
+        self.t = t;
+        self.t_prev = t;
+        self.y = y;
+        self.y_prev = y;
+        sys.rhs(t, &y, &mut self.f);
+        stats.rhs_evals += 1;
+    }
+}
+
 /// The step a run starts with: the configured one (always for a fixed
 /// step), else Hairer's estimate for a method of order `order`. `at` is the
 /// starting point (t, y, f(t, y)); the estimate's evaluation is counted.

@@ -5,6 +5,7 @@
 //! ([`Dop853::prepare_dense`]), so steps that need no interpolation cost 12
 //! evaluations, not 15.
 
+use super::control::Position;
 use super::control::{StiffnessMonitor, first_step, trial_step};
 use super::dop853_coef::*;
 use super::{Stats, StepError, StepperConfig, System, all_finite};
@@ -19,14 +20,9 @@ const STIFF_BOUNDARY: f64 = 6.1;
 #[derive(Debug, Clone)]
 pub struct Dop853<const N: usize> {
     pub(crate) cfg: StepperConfig<N>,
-    pub t: f64,
-    pub t_prev: f64,
-    pub y: [f64; N],
-    y_prev: [f64; N],
+    pub pos: Position<N>,
     /// Stages k1..k16 of the last accepted step (k13 = f(t, y)).
     k: [[f64; N]; 16],
-    /// f(t, y) at the current point.
-    f: [f64; N],
     pub h: f64,
     h_used: f64,
     facold: f64,
@@ -56,12 +52,8 @@ impl<const N: usize> Dop853<N> {
     pub fn new(cfg: StepperConfig<N>) -> Self {
         Self {
             cfg,
-            t: 0.0,
-            t_prev: 0.0,
-            y: [0.0; N],
-            y_prev: [0.0; N],
+            pos: Position::new(),
             k: [[0.0; N]; 16],
-            f: [0.0; N],
             h: cfg.h,
             h_used: 0.0,
             facold: 1e-4,
@@ -75,12 +67,7 @@ impl<const N: usize> Dop853<N> {
     }
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
-        self.t = t;
-        self.t_prev = t;
-        self.y = y;
-        self.y_prev = y;
-        sys.rhs(t, &y, &mut self.f);
-        self.stats.rhs_evals += 1;
+        self.pos.restart(sys, t, y, &mut self.stats);
         self.facold = 1e-4;
         self.rejected_last = false;
         if fresh_step || !(self.h > 0.0) {
@@ -95,14 +82,14 @@ impl<const N: usize> Dop853<N> {
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
         if self.fresh {
-            let at = (self.t, &self.y, &self.f);
+            let at = (self.pos.t, &self.pos.y, &self.pos.f);
             self.h = first_step(&self.cfg, &self.cfg.tol, sys, at, 8, h_max, &mut self.stats);
             self.fresh = false;
         }
         let ncon = self.cfg.tol.n_controlled() as f64;
-        let (t, y) = (self.t, self.y);
+        let (t, y) = (self.pos.t, self.pos.y);
         let mut k = [[0.0; N]; 16];
-        k[0] = self.f;
+        k[0] = self.pos.f;
         let mut h = self.h.min(h_max);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
@@ -192,11 +179,11 @@ impl<const N: usize> Dop853<N> {
                 }
                 self.rejected_last = false;
                 self.k = k;
-                self.t_prev = t;
-                self.y_prev = y;
-                self.t = tph;
-                self.y = ynew;
-                self.f = fnew;
+                self.pos.t_prev = t;
+                self.pos.y_prev = y;
+                self.pos.t = tph;
+                self.pos.y = ynew;
+                self.pos.f = fnew;
                 self.h_used = h;
                 self.h = hnew.min(self.cfg.h_max);
                 self.dense_ready = false;
@@ -216,7 +203,7 @@ impl<const N: usize> Dop853<N> {
             return;
         }
         let h = self.h_used;
-        let (t, y) = (self.t_prev, self.y_prev);
+        let (t, y) = (self.pos.t_prev, self.pos.y_prev);
         let k = &mut self.k;
         for (s, row) in [(13usize, &A14[..]), (14, &A15[..]), (15, &A16[..])] {
             let yt = comb(&y, h, row, k);
@@ -227,7 +214,7 @@ impl<const N: usize> Dop853<N> {
         self.stats.rhs_evals += 3;
         let mut r = [[0.0; N]; 8];
         for i in 0..N {
-            let ydiff = self.y[i] - y[i];
+            let ydiff = self.pos.y[i] - y[i];
             let bspl = h * k[0][i] - ydiff;
             r[0][i] = y[i];
             r[1][i] = ydiff;
@@ -250,12 +237,12 @@ impl<const N: usize> Dop853<N> {
     /// 7th-order continuous extension on [t_prev, t]. Call
     /// [`Dop853::prepare_dense`] first (the stepper dispatcher does).
     pub fn dense(&self, t: f64) -> [f64; N] {
-        let h = self.t - self.t_prev;
+        let h = self.pos.t - self.pos.t_prev;
         if h <= 0.0 {
-            return self.y;
+            return self.pos.y;
         }
         debug_assert!(self.dense_ready, "prepare_dense not called");
-        let s = (t - self.t_prev) / h;
+        let s = (t - self.pos.t_prev) / h;
         let s1 = 1.0 - s;
         let r = &self.rcont;
         let mut out = [0.0; N];

@@ -2,6 +2,7 @@
 //! (Lund stabilisation, β = 0.04), stiffness detection, and the 4th-order
 //! continuous extension.
 
+use super::control::Position;
 use super::control::{StiffnessMonitor, first_step, trial_step};
 use super::{Stats, StepError, StepperConfig, System, all_finite, wrms};
 
@@ -53,11 +54,7 @@ const STIFF_BOUNDARY: f64 = 3.25;
 #[derive(Debug, Clone)]
 pub struct Dopri5<const N: usize> {
     pub(crate) cfg: StepperConfig<N>,
-    pub t: f64,
-    pub t_prev: f64,
-    pub y: [f64; N],
-    /// f(t, y) (first same as last).
-    pub(crate) f: [f64; N],
+    pub pos: Position<N>,
     pub h: f64,
     facold: f64,
     rejected_last: bool,
@@ -71,10 +68,7 @@ impl<const N: usize> Dopri5<N> {
     pub fn new(cfg: StepperConfig<N>) -> Self {
         Self {
             cfg,
-            t: 0.0,
-            t_prev: 0.0,
-            y: [0.0; N],
-            f: [0.0; N],
+            pos: Position::new(),
             h: cfg.h,
             facold: 1e-4,
             rejected_last: false,
@@ -86,11 +80,7 @@ impl<const N: usize> Dopri5<N> {
     }
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
-        self.t = t;
-        self.t_prev = t;
-        self.y = y;
-        sys.rhs(t, &y, &mut self.f);
-        self.stats.rhs_evals += 1;
+        self.pos.restart(sys, t, y, &mut self.stats);
         self.facold = 1e-4;
         self.rejected_last = false;
         if fresh_step || !(self.h > 0.0) {
@@ -102,12 +92,12 @@ impl<const N: usize> Dopri5<N> {
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
         if self.fresh {
-            let at = (self.t, &self.y, &self.f);
+            let at = (self.pos.t, &self.pos.y, &self.pos.f);
             self.h = first_step(&self.cfg, &self.cfg.tol, sys, at, 5, h_max, &mut self.stats);
             self.fresh = false;
         }
         let ncon = self.cfg.tol.n_controlled();
-        let (t, y, k1) = (self.t, self.y, self.f);
+        let (t, y, k1) = (self.pos.t, self.pos.y, self.pos.f);
         let mut h = self.h.min(h_max);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
@@ -208,10 +198,10 @@ impl<const N: usize> Dopri5<N> {
                     hnew = hnew.min(h);
                 }
                 self.rejected_last = false;
-                self.t_prev = t;
-                self.t = tph;
-                self.y = y1;
-                self.f = k7;
+                self.pos.t_prev = t;
+                self.pos.t = tph;
+                self.pos.y = y1;
+                self.pos.f = k7;
                 self.h = hnew.min(self.cfg.h_max);
                 return Ok(());
             }
@@ -224,11 +214,11 @@ impl<const N: usize> Dopri5<N> {
 
     /// 4th-order continuous extension on [t_prev, t].
     pub fn dense(&self, t: f64) -> [f64; N] {
-        let h = self.t - self.t_prev;
+        let h = self.pos.t - self.pos.t_prev;
         if h <= 0.0 {
-            return self.y;
+            return self.pos.y;
         }
-        let s = (t - self.t_prev) / h;
+        let s = (t - self.pos.t_prev) / h;
         let s1 = 1.0 - s;
         let r = &self.rcont;
         let mut out = [0.0; N];

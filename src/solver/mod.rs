@@ -34,6 +34,7 @@
 use serde::{Deserialize, Serialize};
 
 mod control;
+pub use control::Position;
 pub mod dop853;
 mod dop853_coef;
 pub mod dopri5;
@@ -273,16 +274,16 @@ impl<const N: usize> Stepper<N> {
 
     /// Current time (end of the last accepted step).
     pub fn t(&self) -> f64 {
-        dispatch!(self, s => s.t)
+        dispatch!(self, s => s.pos.t)
     }
 
     /// Start of the last accepted step.
     pub fn t_prev(&self) -> f64 {
-        dispatch!(self, s => s.t_prev)
+        dispatch!(self, s => s.pos.t_prev)
     }
 
     pub fn y(&self) -> &[f64; N] {
-        dispatch!(self, s => &s.y)
+        dispatch!(self, s => &s.pos.y)
     }
 
     /// Makes the last step's dense output available (DOP853 computes its

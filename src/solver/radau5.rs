@@ -9,6 +9,7 @@
 //! A into one real and one complex N×N system — simpler, and the same
 //! iterates.
 
+use super::control::Position;
 use super::control::{first_step, trial_step};
 use super::{Scale, Stats, StepError, StepperConfig, System, Tolerance, all_finite, wrms};
 
@@ -120,11 +121,7 @@ pub struct Radau5<const N: usize> {
     /// The tolerances as RADAU5 uses them internally (rtol' = 0.1 rtol^(2/3)).
     tol: Tolerance<N>,
     fnewt: f64,
-    pub t: f64,
-    pub t_prev: f64,
-    pub y: [f64; N],
-    y_prev: [f64; N],
-    f: [f64; N],
+    pub pos: Position<N>,
     /// Stage increments of the last accepted step (dense output).
     z: [[f64; N]; 3],
     pub h: f64,
@@ -159,11 +156,7 @@ impl<const N: usize> Radau5<N> {
             cfg,
             tol,
             fnewt,
-            t: 0.0,
-            t_prev: 0.0,
-            y: [0.0; N],
-            y_prev: [0.0; N],
-            f: [0.0; N],
+            pos: Position::new(),
             z: [[0.0; N]; 3],
             h: cfg.h,
             h_used: 0.0,
@@ -185,12 +178,7 @@ impl<const N: usize> Radau5<N> {
     }
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
-        self.t = t;
-        self.t_prev = t;
-        self.y = y;
-        self.y_prev = y;
-        sys.rhs(t, &y, &mut self.f);
-        self.stats.rhs_evals += 1;
+        self.pos.restart(sys, t, y, &mut self.stats);
         self.z = [[0.0; N]; 3];
         self.h_used = 0.0;
         self.jac_valid = false;
@@ -205,7 +193,7 @@ impl<const N: usize> Radau5<N> {
     }
 
     fn compute_jacobian<S: System<N>>(&mut self, sys: &S) {
-        let (t, y, f0) = (self.t, self.y, self.f);
+        let (t, y, f0) = (self.pos.t, self.pos.y, self.pos.f);
         for j in 0..N {
             if matches!(self.cfg.tol.scale[j], Scale::Ignore) {
                 // Quadrature components: nothing depends on them.
@@ -263,12 +251,12 @@ impl<const N: usize> Radau5<N> {
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
         if self.fresh {
-            let at = (self.t, &self.y, &self.f);
+            let at = (self.pos.t, &self.pos.y, &self.pos.f);
             self.h = first_step(&self.cfg, &self.tol, sys, at, 3, h_max, &mut self.stats);
             self.fresh = false;
         }
         let ncon = self.tol.n_controlled();
-        let (t, y, f0) = (self.t, self.y, self.f);
+        let (t, y, f0) = (self.pos.t, self.pos.y, self.pos.f);
         let mut h = self.h.min(h_max);
         let mut newton_fails = 0u32;
         loop {
@@ -452,11 +440,11 @@ impl<const N: usize> Radau5<N> {
                 self.first = false;
                 self.rejected_last = false;
                 self.z = z;
-                self.t_prev = t;
-                self.y_prev = y;
-                self.t = tph;
-                self.y = ynew;
-                self.f = fnew;
+                self.pos.t_prev = t;
+                self.pos.y_prev = y;
+                self.pos.t = tph;
+                self.pos.y = ynew;
+                self.pos.f = fnew;
                 self.h_used = h;
                 // Keep the Jacobian when Newton converged fast, and the LU when h barely changes.
                 self.jac_fresh = false;
@@ -482,14 +470,14 @@ impl<const N: usize> Radau5<N> {
     pub fn dense(&self, t: f64) -> [f64; N] {
         let h = self.h_used;
         if h <= 0.0 {
-            return self.y;
+            return self.pos.y;
         }
-        let s = (t - self.t_prev) / h;
+        let s = (t - self.pos.t_prev) / h;
         // Lagrange basis on the nodes 0, c1, c2, 1 with p(0) = 0.
         let l1 = s * (s - C2) * (s - 1.0) / (C1 * (C1 - C2) * (C1 - 1.0));
         let l2 = s * (s - C1) * (s - 1.0) / (C2 * (C2 - C1) * (C2 - 1.0));
         let l3 = s * (s - C1) * (s - C2) / ((1.0 - C1) * (1.0 - C2));
-        let mut out = self.y_prev;
+        let mut out = self.pos.y_prev;
         for i in 0..N {
             out[i] += l1 * self.z[0][i] + l2 * self.z[1][i] + l3 * self.z[2][i];
         }

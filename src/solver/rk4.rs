@@ -5,17 +5,14 @@
 //! only to land on `t_end`, on an event, or under `h_max`). A non-finite
 //! state is reported as a failure — that is how an unstable step shows.
 
+use super::control::Position;
 use super::control::check_budget;
 use super::{Stats, StepError, StepperConfig, System, all_finite};
 
 #[derive(Debug, Clone)]
 pub struct Rk4<const N: usize> {
     pub(crate) cfg: StepperConfig<N>,
-    pub t: f64,
-    pub t_prev: f64,
-    pub y: [f64; N],
-    pub(crate) y_prev: [f64; N],
-    pub(crate) f: [f64; N],
+    pub pos: Position<N>,
     pub(crate) f_prev: [f64; N],
     pub h: f64,
     pub stats: Stats,
@@ -26,11 +23,7 @@ impl<const N: usize> Rk4<N> {
     pub fn new(cfg: StepperConfig<N>) -> Self {
         Self {
             cfg,
-            t: 0.0,
-            t_prev: 0.0,
-            y: [0.0; N],
-            y_prev: [0.0; N],
-            f: [0.0; N],
+            pos: Position::new(),
             f_prev: [0.0; N],
             h: cfg.h,
             stats: Stats::default(),
@@ -39,32 +32,27 @@ impl<const N: usize> Rk4<N> {
     }
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], _fresh: bool) {
-        self.t = t;
-        self.t_prev = t;
-        self.y = y;
-        self.y_prev = y;
-        sys.rhs(t, &y, &mut self.f);
-        self.stats.rhs_evals += 1;
-        self.f_prev = self.f;
+        self.pos.restart(sys, t, y, &mut self.stats);
+        self.f_prev = self.pos.f;
         self.h = self.cfg.h;
     }
 
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
-        check_budget(&self.stats, self.cfg.max_steps, self.t)?;
+        check_budget(&self.stats, self.cfg.max_steps, self.pos.t)?;
         let mut h = self.cfg.h.min(h_max).min(self.cfg.h_max);
         if !(h > 0.0) {
-            return Err(StepError::StepSizeUnderflow { t: self.t, h });
+            return Err(StepError::StepSizeUnderflow { t: self.pos.t, h });
         }
         let mut last = false;
-        if self.t + h * (1.0 + 1e-7) >= t_end {
-            h = t_end - self.t;
+        if self.pos.t + h * (1.0 + 1e-7) >= t_end {
+            h = t_end - self.pos.t;
             last = true;
         }
-        if h <= f64::EPSILON * self.t.abs() {
-            return Err(StepError::StepSizeUnderflow { t: self.t, h });
+        if h <= f64::EPSILON * self.pos.t.abs() {
+            return Err(StepError::StepSizeUnderflow { t: self.pos.t, h });
         }
-        let (t, y) = (self.t, self.y);
-        let k1 = self.f;
+        let (t, y) = (self.pos.t, self.pos.y);
+        let k1 = self.pos.f;
         let mut tmp = [0.0; N];
         let mut k2 = [0.0; N];
         let mut k3 = [0.0; N];
@@ -90,35 +78,35 @@ impl<const N: usize> Rk4<N> {
         sys.rhs(tnew, &ynew, &mut fnew);
         self.stats.rhs_evals += 4;
         if !all_finite(&ynew) || !all_finite(&fnew) {
-            return Err(StepError::NonFinite { t: self.t });
+            return Err(StepError::NonFinite { t: self.pos.t });
         }
         self.stats.steps += 1;
-        self.t_prev = t;
-        self.y_prev = y;
+        self.pos.t_prev = t;
+        self.pos.y_prev = y;
         self.f_prev = k1;
-        self.t = tnew;
-        self.y = ynew;
-        self.f = fnew;
+        self.pos.t = tnew;
+        self.pos.y = ynew;
+        self.pos.f = fnew;
         Ok(())
     }
 
     /// Cubic Hermite interpolation on [t_prev, t].
     pub fn dense(&self, t: f64) -> [f64; N] {
-        let h = self.t - self.t_prev;
+        let h = self.pos.t - self.pos.t_prev;
         if h <= 0.0 {
-            return self.y;
+            return self.pos.y;
         }
-        let s = (t - self.t_prev) / h;
+        let s = (t - self.pos.t_prev) / h;
         let h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s);
         let h10 = s * (1.0 - s) * (1.0 - s);
         let h01 = s * s * (3.0 - 2.0 * s);
         let h11 = s * s * (s - 1.0);
         let mut out = [0.0; N];
         for i in 0..N {
-            out[i] = h00 * self.y_prev[i]
+            out[i] = h00 * self.pos.y_prev[i]
                 + h10 * h * self.f_prev[i]
-                + h01 * self.y[i]
-                + h11 * h * self.f[i];
+                + h01 * self.pos.y[i]
+                + h11 * h * self.pos.f[i];
         }
         out
     }
