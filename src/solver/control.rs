@@ -30,6 +30,16 @@ impl<const N: usize> Position<N> {
         }
     }
 
+    /// Moves to the end of an accepted step from (`from`, `y`): the step's
+    /// start becomes the dense output's left end.
+    pub(crate) fn advance(&mut self, from: (f64, [f64; N]), t: f64, y: [f64; N], f: [f64; N]) {
+        self.t_prev = from.0;
+        self.y_prev = from.1;
+        self.t = t;
+        self.y = y;
+        self.f = f;
+    }
+
     /// Restarts at (t, y) with no last step; f(t, y) is evaluated and
     /// counted.
     pub(crate) fn restart<S: System<N>>(

@@ -179,11 +179,7 @@ impl<const N: usize> Dop853<N> {
                 }
                 self.rejected_last = false;
                 self.k = k;
-                self.pos.t_prev = t;
-                self.pos.y_prev = y;
-                self.pos.t = tph;
-                self.pos.y = ynew;
-                self.pos.f = fnew;
+                self.pos.advance((t, y), tph, ynew, fnew);
                 self.h_used = h;
                 self.h = hnew.min(self.cfg.h_max);
                 self.dense_ready = false;

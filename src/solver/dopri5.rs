@@ -198,10 +198,7 @@ impl<const N: usize> Dopri5<N> {
                     hnew = hnew.min(h);
                 }
                 self.rejected_last = false;
-                self.pos.t_prev = t;
-                self.pos.t = tph;
-                self.pos.y = y1;
-                self.pos.f = k7;
+                self.pos.advance((t, y), tph, y1, k7);
                 self.h = hnew.min(self.cfg.h_max);
                 return Ok(());
             }

@@ -440,11 +440,7 @@ impl<const N: usize> Radau5<N> {
                 self.first = false;
                 self.rejected_last = false;
                 self.z = z;
-                self.pos.t_prev = t;
-                self.pos.y_prev = y;
-                self.pos.t = tph;
-                self.pos.y = ynew;
-                self.pos.f = fnew;
+                self.pos.advance((t, y), tph, ynew, fnew);
                 self.h_used = h;
                 // Keep the Jacobian when Newton converged fast, and the LU when h barely changes.
                 self.jac_fresh = false;

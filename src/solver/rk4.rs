@@ -81,12 +81,8 @@ impl<const N: usize> Rk4<N> {
             return Err(StepError::NonFinite { t: self.pos.t });
         }
         self.stats.steps += 1;
-        self.pos.t_prev = t;
-        self.pos.y_prev = y;
         self.f_prev = k1;
-        self.pos.t = tnew;
-        self.pos.y = ynew;
-        self.pos.f = fnew;
+        self.pos.advance((t, y), tnew, ynew, fnew);
         Ok(())
     }
 

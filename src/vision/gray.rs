@@ -13,26 +13,22 @@ pub trait Px: Copy + Send + Sync + 'static {
     fn f(self) -> f32;
     fn u(self) -> u32;
 }
-impl Px for u8 {
-    #[inline(always)]
-    fn f(self) -> f32 {
-        self as f32
-    }
-    #[inline(always)]
-    fn u(self) -> u32 {
-        self as u32
-    }
+/// The two sample types: the same widening for both.
+macro_rules! px_for {
+    ($($t:ty),*) => {$(
+        impl Px for $t {
+            #[inline(always)]
+            fn f(self) -> f32 {
+                self as f32
+            }
+            #[inline(always)]
+            fn u(self) -> u32 {
+                self as u32
+            }
+        }
+    )*};
 }
-impl Px for u16 {
-    #[inline(always)]
-    fn f(self) -> f32 {
-        self as f32
-    }
-    #[inline(always)]
-    fn u(self) -> u32 {
-        self as u32
-    }
-}
+px_for!(u8, u16);
 
 /// Block sums of one full-resolution row into `acc` (integer, exact).
 #[inline(always)]

@@ -82,26 +82,24 @@ pub(super) fn run_ode_solvers(
         use_time_argument,
     };
     let start = Instant::now();
+    // The crate's two methods are different types with the same calls.
+    macro_rules! run {
+        ($method:ty) => {{
+            let mut s = <$method>::new(sys, 0.0, t_end, t_end, ys, rtol, atol);
+            s.set_output(ode_solvers::OutputType::Sparse);
+            let st = s.integrate().map_err(|e| format!("{e:?}"))?;
+            Ok((
+                s.x_out().clone(),
+                s.y_out().clone(),
+                u64::from(st.num_eval),
+                start.elapsed().as_secs_f64() * 1e3,
+            ))
+        }};
+    }
     if dop853 {
-        let mut s = ode_solvers::Dop853::new(sys, 0.0, t_end, t_end, ys, rtol, atol);
-        s.set_output(ode_solvers::OutputType::Sparse);
-        let st = s.integrate().map_err(|e| format!("{e:?}"))?;
-        Ok((
-            s.x_out().clone(),
-            s.y_out().clone(),
-            u64::from(st.num_eval),
-            start.elapsed().as_secs_f64() * 1e3,
-        ))
+        run!(ode_solvers::Dop853<_, _, _>)
     } else {
-        let mut s = ode_solvers::Dopri5::new(sys, 0.0, t_end, t_end, ys, rtol, atol);
-        s.set_output(ode_solvers::OutputType::Sparse);
-        let st = s.integrate().map_err(|e| format!("{e:?}"))?;
-        Ok((
-            s.x_out().clone(),
-            s.y_out().clone(),
-            u64::from(st.num_eval),
-            start.elapsed().as_secs_f64() * 1e3,
-        ))
+        run!(ode_solvers::Dopri5<_, _, _>)
     }
 }
 
