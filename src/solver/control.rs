@@ -121,6 +121,23 @@ pub(crate) fn trial_step(
     }
 }
 
+/// f(t, y) at the end of an accepted step, counted; a derivative that is
+/// not finite there fails the run at `t`.
+pub(crate) fn derivative_at_end<const N: usize, S: System<N>>(
+    sys: &S,
+    t: f64,
+    y: &[f64; N],
+    stats: &mut Stats,
+) -> Result<[f64; N], StepError> {
+    let mut f = [0.0; N];
+    sys.rhs(t, y, &mut f);
+    stats.rhs_evals += 1;
+    if !super::all_finite(&f) {
+        return Err(StepError::NonFinite { t });
+    }
+    Ok(f)
+}
+
 /// Hairer's stiffness detection for explicit methods: every 1000th
 /// accepted step (and each step while stiffness is suspected) estimates
 /// h·|λ| from two stages evaluated at the same time, and counts a step

@@ -6,7 +6,7 @@
 //! evaluations, not 15.
 
 use super::control::Position;
-use super::control::{StiffnessMonitor, first_step, trial_step};
+use super::control::{StiffnessMonitor, derivative_at_end, first_step, trial_step};
 use super::dop853_coef::*;
 use super::{Stats, StepError, StepperConfig, System, all_finite};
 
@@ -159,12 +159,7 @@ impl<const N: usize> Dop853<N> {
             let mut hnew = if self.cfg.fixed { self.cfg.h } else { h / fac };
             if err <= 1.0 {
                 self.facold = err.max(1e-4);
-                let mut fnew = [0.0; N];
-                sys.rhs(tph, &ynew, &mut fnew);
-                self.stats.rhs_evals += 1;
-                if !all_finite(&fnew) {
-                    return Err(StepError::NonFinite { t: tph });
-                }
+                let fnew = derivative_at_end(sys, tph, &ynew, &mut self.stats)?;
                 self.stats.steps += 1;
                 self.stiffness.observe(
                     h,

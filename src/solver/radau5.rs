@@ -10,7 +10,7 @@
 //! iterates.
 
 use super::control::Position;
-use super::control::{first_step, trial_step};
+use super::control::{derivative_at_end, first_step, trial_step};
 use super::{Scale, Stats, StepError, StepperConfig, System, Tolerance, all_finite, wrms};
 
 const SQ6: f64 = 2.449_489_742_783_178;
@@ -427,12 +427,7 @@ impl<const N: usize> Radau5<N> {
                 self.hacc = h;
                 self.erracc = err.max(1e-2);
                 let tph = if last { t_end } else { t + h };
-                let mut fnew = [0.0; N];
-                sys.rhs(tph, &ynew, &mut fnew);
-                self.stats.rhs_evals += 1;
-                if !all_finite(&fnew) {
-                    return Err(StepError::NonFinite { t: tph });
-                }
+                let fnew = derivative_at_end(sys, tph, &ynew, &mut self.stats)?;
                 self.stats.steps += 1;
                 if self.rejected_last {
                     hnew = hnew.min(h);

@@ -1,4 +1,5 @@
-//! Scalar root bracketing and maximisation on dense output (Brent's methods).
+//! Scalar root bracketing and maximisation on dense output (Brent's
+//! methods), and golden-section minimisation for the fits.
 
 /// Finds t in [a, b] with g(a) and g(b) of opposite signs (g(a) on the "old"
 /// side) such that g(t) lies on the NEW side (the sign of g(b), or zero) and
@@ -203,6 +204,32 @@ where
         best = (b, gb);
     }
     (best.0, best.1, evals)
+}
+
+/// Golden-section search for the minimum of a unimodal `f` on [lo, hi]:
+/// `iters` shrinkings by the golden ratio (one evaluation each), then the
+/// middle of what is left.
+pub fn golden_min(mut lo: f64, mut hi: f64, iters: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..iters {
+        if f1 < f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 #[cfg(test)]

@@ -190,7 +190,7 @@ pub(super) fn fit_phase(
         let m = r.iter().sum::<f64>() / r.len() as f64;
         r.iter().map(|x| (x - m).powi(2)).sum::<f64>()
     };
-    let (mut lo, mut hi) = match around {
+    let (lo, hi) = match around {
         Some(c) => (c - 1.5f64.to_radians(), c + 1.5f64.to_radians()),
         None => {
             // Coarse search on a sub-sample, refined on all points below.
@@ -217,26 +217,7 @@ pub(super) fn fit_phase(
             (best.1 - 1.5f64.to_radians(), best.1 + 1.5f64.to_radians())
         }
     };
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let mut x1 = hi - g * (hi - lo);
-    let mut x2 = lo + g * (hi - lo);
-    let (mut f1, mut f2) = (cost(x1), cost(x2));
-    for _ in 0..40 {
-        if f1 < f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = cost(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = cost(x2);
-        }
-    }
-    Some(0.5 * (lo + hi))
+    Some(crate::solver::roots::golden_min(lo, hi, 40, cost))
 }
 
 pub(super) struct Bound {
