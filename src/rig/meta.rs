@@ -74,6 +74,18 @@ fn short(v: &str) -> String {
     }
 }
 
+/// A warning about a value of the log's `rig` metadata record.
+fn metadata_warning(file: &str, text: String) -> Finding {
+    Finding::new(
+        Severity::Warning,
+        FindingCode::Metadata,
+        file,
+        None,
+        None,
+        format!("metadata 'rig': {text}"),
+    )
+}
+
 fn num(
     raw: &BTreeMap<String, String>,
     key: &str,
@@ -88,16 +100,9 @@ fn num(
         Ok(_) => what,
         Err(_) => "a number",
     };
-    findings.push(Finding::new(
-        Severity::Warning,
-        FindingCode::Metadata,
+    findings.push(metadata_warning(
         file,
-        None,
-        None,
-        format!(
-            "metadata 'rig': {key} = '{}' is not {not}; ignored",
-            short(v)
-        ),
+        format!("{key} = '{}' is not {not}; ignored", short(v)),
     ));
     None
 }
@@ -149,14 +154,10 @@ impl RigMeta {
         m.angle_offset_rad = bounded("angle_offset_rad", 100.0, "an angle within ±100 rad");
         if let Some(mat) = &m.material {
             if !MATERIALS.contains(&mat.as_str()) {
-                findings.push(Finding::new(
-                    Severity::Warning,
-                    FindingCode::Metadata,
+                findings.push(metadata_warning(
                     file,
-                    None,
-                    None,
                     format!(
-                        "metadata 'rig': material '{mat}' is not one the model knows ({})",
+                        "material '{mat}' is not one the model knows ({})",
                         MATERIALS.join(", ")
                     ),
                 ));

@@ -130,6 +130,17 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
         return set;
     };
     let label_angle = format!("{} (angle)", angle.topic);
+    // What the crank angle's offsets and quantisation are said with.
+    let angle_finding = |severity, text: String| {
+        Finding::new(
+            severity,
+            FindingCode::OffsetEstimated,
+            &file,
+            Some(&label_angle),
+            None,
+            text,
+        )
+    };
     let Some((mut crank, wrapped)) = Crank::unwrap(angle) else {
         return set;
     };
@@ -142,12 +153,8 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
         }
         set.crank.encoder_counts = Some(nc);
         set.crank.quantisation_correction_rad = half;
-        findings.push(Finding::new(
+        findings.push(angle_finding(
             Severity::Info,
-            FindingCode::OffsetEstimated,
-            &file,
-            Some(&label_angle),
-            None,
             format!(
                 "the crank angle is quantised to 2π/{nc} (an encoder of {nc} counts per turn): half a count ({:.4}°) is added, as encoders report floor(θ/Δ)",
                 half.to_degrees()
@@ -275,12 +282,8 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
         );
         if let (Some(e), Some(s)) = (ao.estimate, ao.sigma) {
             if wrap_pi(e - m).abs() > (3.0 * s).max(1f64.to_radians()) {
-                findings.push(Finding::new(
+                findings.push(angle_finding(
                     Severity::Warning,
-                    FindingCode::OffsetEstimated,
-                    &file,
-                    Some(&label_angle),
-                    None,
                     format!(
                         "metadata angle_offset_rad = {m} rad ({:.2}°) disagrees with the estimate {est_text}; the metadata value is used",
                         m.to_degrees()
@@ -295,24 +298,16 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
             ao.source = ValueSource::Estimated;
             ao.note =
                 format!("no angle_offset_rad in the metadata: the estimate {est_text} is applied");
-            findings.push(Finding::new(
+            findings.push(angle_finding(
                 Severity::Warning,
-                FindingCode::OffsetEstimated,
-                &file,
-                Some(&label_angle),
-                None,
                 format!("encoder zero is off: crank angle offset estimated at {est_text} and applied (no angle_offset_rad in the metadata)"),
             ));
         } else {
             ao.note = format!(
                 "no angle_offset_rad in the metadata; estimate {est_text} is within max(3σ, 1°) of 0: the encoder is taken as calibrated (offset 0)"
             );
-            findings.push(Finding::new(
+            findings.push(angle_finding(
                 Severity::Info,
-                FindingCode::OffsetEstimated,
-                &file,
-                Some(&label_angle),
-                None,
                 format!("crank angle offset estimated at {est_text}: consistent with a calibrated encoder, 0 used"),
             ));
         }

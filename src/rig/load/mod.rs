@@ -512,23 +512,23 @@ pub(crate) fn load_inner(
                 }
             }
             None => {
-                if kind == SignalKind::Speed {
+                let derived = match kind {
+                    SignalKind::Speed => {
+                        Some("no speed channel: motor speed is derived from the crank angle")
+                    }
+                    SignalKind::Cycle => Some(
+                        "no cycle topic: cycles are taken from the crank angle (top dead centre at π)",
+                    ),
+                    _ => None,
+                };
+                if let Some(how) = derived {
                     st.findings.push(Finding::new(
                         Severity::Info,
                         FindingCode::DerivedSignal,
                         &file,
                         None,
                         None,
-                        format!("the channel map ({}) has no speed channel: motor speed is derived from the crank angle", map.source),
-                    ));
-                } else if kind == SignalKind::Cycle {
-                    st.findings.push(Finding::new(
-                        Severity::Info,
-                        FindingCode::DerivedSignal,
-                        &file,
-                        None,
-                        None,
-                        format!("the channel map ({}) has no cycle topic: cycles are taken from the crank angle (top dead centre at π)", map.source),
+                        format!("the channel map ({}) has {how}", map.source),
                     ));
                 }
             }
