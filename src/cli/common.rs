@@ -345,3 +345,29 @@ impl LogReadArgs {
         Ok(opts)
     }
 }
+
+/// The integrator and its tolerances (`simulate`, `sweep`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct SolverArgs {
+    /// Integrator: rk4, dopri5, dop853 or radau5.
+    #[arg(long, default_value = "dop853")]
+    pub method: String,
+    /// Relative tolerance (adaptive methods).
+    #[arg(long, default_value_t = 1e-8, value_parser = bounds::rtol)]
+    pub rtol: f64,
+    /// Absolute tolerance, SI (m, m/s).
+    #[arg(long, default_value_t = 1e-14, value_parser = bounds::atol)]
+    pub atol: f64,
+}
+
+impl SolverArgs {
+    /// The method named by `--method`, or an error listing the allowed names.
+    pub fn method(&self) -> anyhow::Result<crate::solver::Method> {
+        crate::solver::Method::parse(&self.method).with_context(|| {
+            format!(
+                "invalid --method `{}` (allowed: rk4, dopri5, dop853, radau5)",
+                self.method
+            )
+        })
+    }
+}

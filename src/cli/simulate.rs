@@ -8,7 +8,6 @@ use crate::progress::{Progress, ProgressBarGuard};
 use crate::sim::ensemble::{EnsembleResult, run_ensemble};
 use crate::sim::fidelity::{FidelityReport, SceneResolution, assess};
 use crate::sim::{Level, LevelChoice, SimOptions, SimResult, simulate};
-use crate::solver::Method;
 use anyhow::{Context, anyhow};
 use serde_json::{Value, json};
 use std::io::Write;
@@ -22,15 +21,8 @@ pub struct Args {
     /// Fidelity level: auto (cheapest sufficient), kinematic, ideal or clearance.
     #[arg(long, default_value = "clearance")]
     pub level: String,
-    /// Integrator: rk4, dopri5, dop853 or radau5.
-    #[arg(long, default_value = "dop853")]
-    pub method: String,
-    /// Relative tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-8, value_parser = super::common::bounds::rtol)]
-    pub rtol: f64,
-    /// Absolute tolerance, SI (m, m/s).
-    #[arg(long, default_value_t = 1e-14, value_parser = super::common::bounds::atol)]
-    pub atol: f64,
+    #[command(flatten)]
+    pub solver: super::common::SolverArgs,
     /// Fixed step in seconds (RK4: default period/20000; adaptive methods: turns error control off).
     #[arg(long, value_parser = super::common::bounds::step_s)]
     pub step: Option<f64>,
@@ -65,12 +57,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let p = args.params.resolve()?;
-    let method = Method::parse(&args.method).ok_or_else(|| {
-        anyhow!(
-            "invalid --method `{}` (allowed: rk4, dopri5, dop853, radau5)",
-            args.method
-        )
-    })?;
+    let method = args.solver.method()?;
     let choice = LevelChoice::parse(&args.level).ok_or_else(|| {
         anyhow!(
             "invalid --level `{}` (allowed: auto, kinematic, ideal, clearance)",
@@ -97,8 +84,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let opts = SimOptions {
         level,
         method,
-        rtol: args.rtol,
-        atol: args.atol,
+        rtol: args.solver.rtol,
+        atol: args.solver.atol,
         step: args.step,
         warmup: args.warmup,
         revs: args.revs,

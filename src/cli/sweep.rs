@@ -7,7 +7,6 @@ use crate::progress::{Progress, ProgressBarGuard};
 use crate::sim::ensemble::{FIGURES, figure};
 use crate::sim::sweep::{Factor, SweepGrid, SweepResult, run_sweep};
 use crate::sim::{Level, SimOptions};
-use crate::solver::Method;
 use anyhow::{Context, anyhow};
 use std::io::Write;
 use std::path::PathBuf;
@@ -29,13 +28,8 @@ pub struct Args {
     /// A TOML grid file (clearances_mm, speeds_rpm, materials); command-line lists override it.
     #[arg(long, value_name = "FILE")]
     pub grid: Option<PathBuf>,
-    /// Integrator.
-    #[arg(long, default_value = "dop853")]
-    pub method: String,
-    #[arg(long, default_value_t = 1e-8, value_parser = super::common::bounds::rtol)]
-    pub rtol: f64,
-    #[arg(long, default_value_t = 1e-14, value_parser = super::common::bounds::atol)]
-    pub atol: f64,
+    #[command(flatten)]
+    pub solver: super::common::SolverArgs,
     #[arg(long, default_value_t = 2.0, value_parser = super::common::bounds::warmup)]
     pub warmup: f64,
     #[arg(long, default_value_t = 3.0, value_parser = super::common::bounds::revs)]
@@ -76,17 +70,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .collect();
     }
     grid.validate().map_err(|e| anyhow!("sweep grid: {e}"))?;
-    let method = Method::parse(&args.method).ok_or_else(|| {
-        anyhow!(
-            "invalid --method `{}` (allowed: rk4, dopri5, dop853, radau5)",
-            args.method
-        )
-    })?;
+    let method = args.solver.method()?;
     let opts = SimOptions {
         level: Level::Clearance,
         method,
-        rtol: args.rtol,
-        atol: args.atol,
+        rtol: args.solver.rtol,
+        atol: args.solver.atol,
         warmup: args.warmup,
         revs: args.revs,
         ..SimOptions::default()
