@@ -257,7 +257,43 @@ pub struct Inspection {
     pub warnings: Vec<String>,
 }
 
+/// What a view found on the part: every grid position, the extras that
+/// count, and the blobs seen but not counted.
+pub struct Findings {
+    pub pins: Vec<PinResult>,
+    pub extras: Vec<ExtraResult>,
+    pub ignored: Vec<ExtraResult>,
+}
+
 impl Inspection {
+    /// The inspection of one image by `recipe`: what the view found, judged
+    /// by the pass rule (counts and verdict filled in).
+    pub fn judged(
+        recipe: &super::recipe::Recipe,
+        image: ImageInfo,
+        grid: GridFit,
+        housing: Option<Housing>,
+        found: Findings,
+        warnings: Vec<String>,
+    ) -> Inspection {
+        let mut ins = Inspection {
+            part_number: recipe.part_number.clone(),
+            view: recipe.view,
+            verdict: Verdict::Fail,
+            tolerance: recipe.tolerance_in_force(),
+            image,
+            grid,
+            housing,
+            pins: found.pins,
+            extras: found.extras,
+            ignored: found.ignored,
+            counts: StatusCounts::default(),
+            warnings,
+        };
+        ins.finish();
+        ins
+    }
+
     /// Applies the pass rule and fills `counts` (call after pins and extras are set).
     pub fn finish(&mut self) {
         let mut c = StatusCounts::default();

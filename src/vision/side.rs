@@ -607,29 +607,27 @@ pub fn inspect_side<P: Px>(
             points: edge.inlier.iter().filter(|b| **b).count(),
         }),
     };
-    let mut ins = Inspection {
-        part_number: recipe.part_number.clone(),
-        view: recipe.view,
-        verdict: Verdict::Fail,
-        tolerance: recipe.tolerance_in_force(),
-        image: info,
-        grid: GridFit {
-            transform: sim,
-            centre_px: (ox, oy),
-            rotation_deg: phi.to_degrees(),
-            mm_per_px,
-            mm_per_px_estimated: fixed_s.is_none(),
-            fit_inliers: inl.iter().filter(|b| **b).count(),
-            fit_rms_px: rms,
-            anchored_by_housing: placement.ambiguous,
-        },
-        housing: Some(housing),
+    let grid = GridFit {
+        transform: sim,
+        centre_px: (ox, oy),
+        rotation_deg: phi.to_degrees(),
+        mm_per_px,
+        mm_per_px_estimated: fixed_s.is_none(),
+        fit_inliers: inl.iter().filter(|b| **b).count(),
+        fit_rms_px: rms,
+        anchored_by_housing: placement.ambiguous,
+    };
+    let found = Findings {
         pins,
         extras,
         ignored,
-        counts: StatusCounts::default(),
-        warnings,
     };
-    ins.finish();
-    Ok(ins)
+    Ok(Inspection::judged(
+        recipe,
+        info,
+        grid,
+        Some(housing),
+        found,
+        warnings,
+    ))
 }

@@ -671,29 +671,22 @@ pub fn inspect_top<P: Px>(
     }
 
     let (cx, cy) = sim.apply(0.0, 0.0);
-    let mut ins = Inspection {
-        part_number: recipe.part_number.clone(),
-        view: recipe.view,
-        verdict: Verdict::Fail,
-        tolerance: recipe.tolerance_in_force(),
-        image: info,
-        grid: GridFit {
-            transform: sim,
-            centre_px: (cx, cy),
-            rotation_deg: sim.theta.to_degrees(),
-            mm_per_px,
-            mm_per_px_estimated: fixed.is_none(),
-            fit_inliers: inliers,
-            fit_rms_px: rms,
-            anchored_by_housing: placement.ambiguous && housing_lat.is_some(),
-        },
-        housing,
+    let grid = GridFit {
+        transform: sim,
+        centre_px: (cx, cy),
+        rotation_deg: sim.theta.to_degrees(),
+        mm_per_px,
+        mm_per_px_estimated: fixed.is_none(),
+        fit_inliers: inliers,
+        fit_rms_px: rms,
+        anchored_by_housing: placement.ambiguous && housing_lat.is_some(),
+    };
+    let found = Findings {
         pins,
         extras,
         ignored,
-        counts: StatusCounts::default(),
-        warnings,
     };
-    ins.finish();
-    Ok(ins)
+    Ok(Inspection::judged(
+        recipe, info, grid, housing, found, warnings,
+    ))
 }
