@@ -44,6 +44,17 @@ pub enum Polarity {
     Dark,
 }
 
+impl Polarity {
+    /// The sign that makes the pins bright: intensities are multiplied by
+    /// it, so the detector always looks for bright features.
+    pub fn sign(self) -> f32 {
+        match self {
+            Polarity::Bright => 1.0,
+            Polarity::Dark => -1.0,
+        }
+    }
+}
+
 /// Allowed deviations.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -23,7 +23,7 @@ use super::gray::{Coarse, ImageInfo, Plane, Px};
 use super::grid;
 use super::label;
 use super::measure::{self, Localiser, Roi};
-use super::recipe::{Polarity, Recipe};
+use super::recipe::Recipe;
 use super::result::*;
 use super::side_row::{bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale};
 use super::tip_levels;
@@ -55,10 +55,7 @@ pub fn inspect_side<P: Px>(
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
     // Silhouette is bright in `sign` space.
-    let sign = match recipe.polarity {
-        Polarity::Dark => -1.0,
-        Polarity::Bright => 1.0,
-    };
+    let sign = recipe.polarity.sign();
     // Without `mm_per_px` nothing says how wide a pin is until the bars
     // are found: a fine coarse factor (2) then, and the width measured from
     // the bars below (never a guess from the image's size).

@@ -14,7 +14,7 @@ use super::fit::{self, Similarity};
 use super::gray::{Coarse, ImageInfo, Plane, Px};
 use super::grid::{self, Lattice, LatticeError};
 use super::measure::{self, BlobMeasure, Roi};
-use super::recipe::{Polarity, Recipe};
+use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of,
@@ -145,10 +145,7 @@ pub fn inspect_top<P: Px>(
     full_scale: f32,
     opts: &InspectOptions,
 ) -> Result<Inspection, VisionError> {
-    let sign = match recipe.polarity {
-        Polarity::Bright => 1.0,
-        Polarity::Dark => -1.0,
-    };
+    let sign = recipe.polarity.sign();
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
     let (pin_px0, _estimate) = match recipe.mm_per_px {
