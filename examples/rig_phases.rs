@@ -9,9 +9,9 @@
 //! the parallel decode with the sequential one). A diagnostic, not a
 //! benchmark: figures for BENCHMARKS.md come from `/usr/bin/time` on the CLI.
 
-use pinsight::cli::common::ParamArgs;
-use pinsight::cli::overlay::{load_and_cycles, write_outputs};
+use pinsight::engine::overlay::load_for_overlay;
 use pinsight::overlay::compare::{OverlayOptions, model_params, overlay};
+use pinsight::overlay::outputs::write_outputs;
 use pinsight::progress::Progress;
 use pinsight::rig::LoadOptions;
 use std::path::PathBuf;
@@ -51,14 +51,14 @@ fn main() -> anyhow::Result<()> {
     }
     let mut clk = Clock(Instant::now(), cpu_s());
     let lopts = LoadOptions::default();
-    let pargs = ParamArgs::default();
     if !args.iter().any(|a| a == "--no-load-alone") {
         let _ = pinsight::rig::load(&log, &lopts, &Progress::new(0))?;
         clk.lap("load alone (dropped)");
     }
-    let (log_data, file_params, cs) = load_and_cycles(&log, &lopts, &pargs, 720, false)?;
+    let (log_data, cs) =
+        load_for_overlay(&log, &lopts, None, 720, &Progress::new(0)).map_err(anyhow::Error::msg)?;
     clk.lap("load + cycles");
-    let (params, notes) = model_params(&log_data, file_params, &[])?;
+    let (params, notes) = model_params(&log_data, None, &[])?;
     let progress = Progress::new(0);
     let report = overlay(
         &log_data,

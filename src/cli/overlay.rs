@@ -9,15 +9,15 @@
 
 use super::common::ParamArgs;
 use crate::cli::common::{outln, outp};
-use crate::engine::overlay::{cycles_of, overlay_job};
+use crate::engine::overlay::{auto_level, load_for_overlay, overlay_job};
 use crate::model::Params;
-use crate::overlay::compare::{OverlayOptions, model_params};
+use crate::overlay::compare::OverlayOptions;
 pub use crate::overlay::outputs::{
     curves_csv, cycles_csv, figures_csv, overlay_panels, run_csv, summary_text, write_outputs,
 };
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::rig::cycles::CycleSet;
-use crate::rig::{LoadOptions, RigLog, load};
+use crate::rig::{LoadOptions, RigLog};
 use crate::sim::LevelChoice;
 use anyhow::{anyhow, bail};
 use std::path::{Path, PathBuf};
@@ -88,8 +88,10 @@ pub fn parse_cycle_range(s: &str) -> anyhow::Result<(u64, u64)> {
     Ok((a, b))
 }
 
-/// Loads the log and delimits its cycles with the model's geometry. A log
-/// that loads with no usable signal is an error naming the file.
+/// Loads the log and delimits its cycles with the model's geometry (the
+/// engine's [`load_for_overlay`], with a progress bar unless
+/// `show_progress` is off). Returns the parameter file's values too
+/// (without the `--set` overrides, applied after the metadata).
 pub fn load_and_cycles(
     path: &Path,
     opts: &LoadOptions,
@@ -97,7 +99,6 @@ pub fn load_and_cycles(
     points: usize,
     show_progress: bool,
 ) -> anyhow::Result<(RigLog, Option<Params>, CycleSet)> {
-    // The parameter file (without the --set overrides, applied after the metadata).
     let file_params = if params.params.is_some() || params.preset.is_some() {
         Some(
             ParamArgs {
@@ -110,24 +111,9 @@ pub fn load_and_cycles(
         None
     };
     let progress = Progress::new(0);
-    let log = {
-        let _bar = show_progress.then(|| ProgressBarGuard::start(progress.clone(), "loading"));
-        load(path, opts, &progress).map_err(|e| anyhow!("{e}"))?
-    };
-    let geom_params = file_params.clone().unwrap_or_else(Params::paper);
-    let cs = cycles_of(&log, &geom_params, points);
-    if log.signals.displacement.is_none() {
-        bail!(
-            "{}: no displacement channel ({}): the stroke cannot be compared",
-            path.display(),
-            log.report
-                .findings
-                .iter()
-                .map(|f| f.message.clone())
-                .collect::<Vec<_>>()
-                .join("; ")
-        );
-    }
+    let _bar = show_progress.then(|| ProgressBarGuard::start(progress.clone(), "loading"));
+    let (log, cs) = load_for_overlay(path, opts, file_params.as_ref(), points, &progress)
+        .map_err(anyhow::Error::msg)?;
     Ok((log, file_params, cs))
 }
 
@@ -157,20 +143,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let level = match level {
         Some(l) => l,
         None => {
-            // The fidelity chooser needs the parameters the job will use.
-            let (params, _) = model_params(&log, file_params.clone(), &args.params.sets)
-                .map_err(|e| anyhow!("{}: model parameters: {e}", log.file))?;
-            let f = crate::sim::fidelity::assess(
-                &params,
-                crate::sim::fidelity::SceneResolution {
-                    stroke_mm: 0.002,
-                    force_n: 0.05,
-                    needs_forces: true,
-                },
-                crate::solver::Method::Dop853,
-            )?;
-            extra_notes.push(format!("--level auto chose {}", f.chosen.name()));
-            f.chosen
+            let chosen = auto_level(&log, file_params.clone(), &args.params.sets)
+                .map_err(anyhow::Error::msg)?;
+            extra_notes.push(format!("--level auto chose {}", chosen.name()));
+            chosen
         }
     };
     let mut opts = OverlayOptions {

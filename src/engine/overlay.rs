@@ -5,9 +5,10 @@ use crate::model::kinematics::Geometry;
 use crate::model::params::Params;
 use crate::overlay::compare::{OverlayOptions, OverlayReport, model_params, overlay};
 use crate::progress::Progress;
-use crate::rig::RigLog;
 use crate::rig::cycles::{CycleOptions, CycleSet, analyse};
+use crate::rig::{LoadOptions, RigLog, load};
 use serde::Serialize;
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -33,6 +34,66 @@ pub fn cycles_of(log: &RigLog, geometry: &Params, points: usize) -> CycleSet {
             ..CycleOptions::default()
         },
     )
+}
+
+/// Loads a rig log for measured-against-predicted work (`overlay`,
+/// `calibrate`): the log, and its cycles delimited with the mechanism of
+/// `geometry` (the `paper` preset when none is given). A log with no
+/// displacement channel is an error naming the file and what the loader
+/// found, since the stroke cannot be compared.
+pub fn load_for_overlay(
+    path: &Path,
+    opts: &LoadOptions,
+    geometry: Option<&Params>,
+    points: usize,
+    progress: &Progress,
+) -> Result<(RigLog, CycleSet), String> {
+    let log = load(path, opts, progress).map_err(|e| e.to_string())?;
+    let paper;
+    let geometry = match geometry {
+        Some(p) => p,
+        None => {
+            paper = Params::paper();
+            &paper
+        }
+    };
+    let cs = cycles_of(&log, geometry, points);
+    if log.signals.displacement.is_none() {
+        return Err(format!(
+            "{}: no displacement channel ({}): the stroke cannot be compared",
+            path.display(),
+            log.report
+                .findings
+                .iter()
+                .map(|f| f.message.clone())
+                .collect::<Vec<_>>()
+                .join("; ")
+        ));
+    }
+    Ok((log, cs))
+}
+
+/// The fidelity level `--level auto` picks for a log's overlay: the
+/// cheapest that resolves 2 µm of stroke and 0.05 N of force with the
+/// parameters the job will use.
+pub fn auto_level(
+    log: &RigLog,
+    file_params: Option<Params>,
+    sets: &[String],
+) -> Result<crate::sim::Level, String> {
+    let (params, _) = model_params(log, file_params, sets)
+        .map_err(|e| format!("{}: model parameters: {e}", log.file))?;
+    let f = crate::sim::fidelity::assess(
+        &params,
+        crate::sim::fidelity::SceneResolution {
+            stroke_mm: 0.002,
+            force_n: 0.05,
+            needs_forces: true,
+        },
+        crate::solver::Method::Dop853,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(f.chosen)
 }
 
 /// The overlay job: the model parameters (a parameter file if given, else
