@@ -23,7 +23,9 @@
 //! 0–3 (result, result with findings, error, items in error), any panic text, a message without "error", or a number printed
 //! with more than 30 digits.
 
+mod common;
 use clap::CommandFactory;
+use common::Rng;
 use pinsight::cli::Cli;
 use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::{Path, PathBuf};
@@ -232,44 +234,33 @@ fn hostile() -> Vec<String> {
     .collect()
 }
 
-/// A small deterministic generator (xorshift64*), so a failing random run
-/// is replayed from its seed.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn value(&mut self) -> String {
-        match self.below(6) {
-            0 => format!("{:e}", f64::from_bits(self.next())),
-            1 => {
-                let e = self.below(40) as i32 - 20;
-                let m = (self.next() % 10_000) as f64 / 1000.0;
-                let sign = if self.below(4) == 0 { "-" } else { "" };
-                format!("{sign}{}", m * 10f64.powi(e))
-            }
-            2 => format!("{}", self.next() as i64 >> self.below(64)),
-            3 => format!("{}", self.below(20_000)),
-            4 => {
-                let n = self.below(4) + 1;
-                (0..n)
-                    .map(|_| format!("{}", self.below(3000) as f64 / 7.0))
-                    .collect::<Vec<_>>()
-                    .join(",")
-            }
-            _ => {
-                const CHARS: &[u8] = b"0123456789.-+eE,x/=_ aInfN";
-                let n = self.below(12);
-                (0..n)
-                    .map(|_| CHARS[self.below(CHARS.len())] as char)
-                    .collect()
-            }
+/// A random option value: a float of any bit pattern, a decimal of any
+/// magnitude, an integer, a small count, a list, or a string of the
+/// characters numbers are made of.
+fn random_value(rng: &mut Rng) -> String {
+    match rng.below(6) {
+        0 => format!("{:e}", f64::from_bits(rng.next())),
+        1 => {
+            let e = rng.below(40) as i32 - 20;
+            let m = (rng.next() % 10_000) as f64 / 1000.0;
+            let sign = if rng.below(4) == 0 { "-" } else { "" };
+            format!("{sign}{}", m * 10f64.powi(e))
+        }
+        2 => format!("{}", rng.next() as i64 >> rng.below(64)),
+        3 => format!("{}", rng.below(20_000)),
+        4 => {
+            let n = rng.below(4) + 1;
+            (0..n)
+                .map(|_| format!("{}", rng.below(3000) as f64 / 7.0))
+                .collect::<Vec<_>>()
+                .join(",")
+        }
+        _ => {
+            const CHARS: &[u8] = b"0123456789.-+eE,x/=_ aInfN";
+            let n = rng.below(12);
+            (0..n)
+                .map(|_| CHARS[rng.below(CHARS.len())] as char)
+                .collect()
         }
     }
 }
@@ -577,7 +568,7 @@ fn every_option_ends_with_a_result_or_a_clear_error() {
             .map(|_| {
                 let t = targets[rng.below(targets.len())].clone();
                 let key = (!t.keys.is_empty()).then(|| t.keys[rng.below(t.keys.len())].clone());
-                let v = rng.value();
+                let v = random_value(&mut rng);
                 (t, v, key)
             })
             .collect();

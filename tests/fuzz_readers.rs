@@ -15,6 +15,8 @@
 //! it is a plain generator, so a failing input is written to
 //! `target/fuzz-failures/` to be replayed.
 
+mod common;
+use common::Rng;
 use pinsight::model::Params;
 use pinsight::progress::Progress;
 use pinsight::rig::channel_map::ChannelMap;
@@ -49,20 +51,6 @@ fn seed() -> u64 {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(0x0BAD_5EED_1234_5678)
-}
-
-/// xorshift64*: small, deterministic, replayable.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
 }
 
 const INTERESTING: &[u8] = &[

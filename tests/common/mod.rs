@@ -1,4 +1,5 @@
-//! Shared helpers of the TUI and batch tests.
+//! Shared helpers of the integration tests: the demo session with its
+//! results (TUI and batch tests), a replayable random generator (fuzz tests).
 #![allow(dead_code)]
 
 use pinsight::panes::Session;
@@ -33,4 +34,22 @@ pub fn full_session_with_methods() -> Session {
     let mut s = full_session();
     s.run_methods_now();
     s
+}
+
+/// A small deterministic generator (xorshift64*) for the fuzz tests, so a
+/// failing random run is replayed from its seed (seed ≠ 0).
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Uniform in 0..n (0 for n = 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
 }
