@@ -251,3 +251,150 @@ fn a_bad_recipe_is_one_answer_from_cli_render_and_batch() {
     assert_eq!(render, cli, "render yield differs from pinsight yield");
     assert_eq!(batch, cli, "batch export differs from pinsight yield");
 }
+
+#[test]
+fn sweep_is_one_answer_from_cli_and_the_study_pane_with_a_failing_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A level outside the clearance's physical range: that case fails and
+    // is reported as such by every face; the others are computed.
+    let grid =
+        "clearances_mm = [0.1, 0.3, 1e-300]\nspeeds_rpm = [1200]\nmaterials = [\"alloy_steel\"]\n";
+    std::fs::write(d.join("grid.toml"), grid).unwrap();
+    let cli = run_json(
+        &[
+            "sweep",
+            "--grid",
+            "grid.toml",
+            "--warmup",
+            "0",
+            "--revs",
+            "1",
+            "--no-charts",
+            "--out",
+            "sw",
+            "--json",
+        ],
+        d,
+    );
+    let render = run_json(
+        &[
+            "render",
+            "study",
+            "--grid",
+            "grid.toml",
+            "--warmup",
+            "0",
+            "--revs",
+            "1",
+            "--format",
+            "json",
+        ],
+        d,
+    );
+    let script = "[[step]]\nkind = \"set\"\nstudy = { clearances_mm = [0.1, 0.3, 1e-300], speeds_rpm = [1200], materials = [\"alloy_steel\"], warmup = 0, revs = 1 }\n\n[[step]]\nkind = \"run\"\nwhat = \"study\"\n\n[[step]]\nkind = \"export\"\npane = \"study\"\npath = \"study.json\"\n";
+    std::fs::write(d.join("script.toml"), script).unwrap();
+    let o = bin()
+        .arg("batch")
+        .arg(d.join("script.toml"))
+        .arg("--out")
+        .arg(d.join("batch-out"))
+        .output()
+        .unwrap();
+    let text = std::fs::read_to_string(d.join("batch-out/study.json")).unwrap_or_else(|e| {
+        panic!(
+            "batch export of study: {e}\n{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    let batch: Value = serde_json::from_str(&text).unwrap();
+
+    let cases = cli["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 3, "{cli:#}");
+    for pane in [&render, &batch] {
+        assert_eq!(pane["cases_total"], 3, "{pane:#}");
+        assert_eq!(pane["cases_failed"], 1, "{pane:#}");
+        let line = pane["line"].as_array().unwrap();
+        for case in cases {
+            let c = case["clearance_mm"].as_f64().unwrap();
+            let row = line
+                .iter()
+                .find(|r| r["clearance_mm"].as_f64() == Some(c))
+                .unwrap_or_else(|| panic!("no row for c = {c} mm in {pane:#}"));
+            match case["error"].as_str() {
+                Some(e) => {
+                    assert!(e.contains("clearance_mm"), "{e}");
+                    assert_eq!(row["error"].as_str(), Some(e), "{row:#}");
+                }
+                None => {
+                    let s = &case["summary"];
+                    assert!(row["error"].is_null(), "{row:#}");
+                    assert_eq!(row["impacts"], s["n_impacts"], "c = {c}");
+                    assert_eq!(row["disp_dev_mean_mm"], s["disp_dev_mean_mm"], "c = {c}");
+                    assert_eq!(row["vel_dev_mean_mps"], s["vel_dev_mean_mps"], "c = {c}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_quick_methods_lab_is_one_answer_from_cli_and_the_methods_pane() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cli = run_json(&["methods", "--out", "m", "--json"], d);
+    let render = run_json(&["render", "methods", "--format", "json"], d);
+    let script = "[[step]]\nkind = \"run\"\nwhat = \"methods\"\n\n[[step]]\nkind = \"export\"\npane = \"methods\"\npath = \"methods.json\"\n";
+    std::fs::write(d.join("script.toml"), script).unwrap();
+    let o = bin()
+        .arg("batch")
+        .arg(d.join("script.toml"))
+        .arg("--out")
+        .arg(d.join("batch-out"))
+        .output()
+        .unwrap();
+    let text = std::fs::read_to_string(d.join("batch-out/methods.json")).unwrap_or_else(|e| {
+        panic!(
+            "batch export of methods: {e}\n{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    let batch: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(cli["effort"], "quick");
+    let stability = cli["stability"].as_array().unwrap();
+    let fidelity = cli["fidelity"].as_array().unwrap();
+    let failures = cli["failures"].as_array().unwrap();
+    assert!(!stability.is_empty() && !fidelity.is_empty() && !failures.is_empty());
+    for pane in [&render, &batch] {
+        assert_eq!(pane["effort"], cli["effort"]);
+        // Stable steps: measured and predicted, per method and variant.
+        let rows = pane["stability"].as_array().unwrap();
+        assert_eq!(rows.len(), stability.len(), "{pane:#}");
+        for (r, c) in rows.iter().zip(stability) {
+            assert_eq!(r["variant"], c["variant"]);
+            assert_eq!(r["method"], c["method"]);
+            assert_eq!(r["omega_contact"], c["omega_contact"]);
+            assert_eq!(r["stable_step_s"], c["measured_stable_step_s"]);
+            assert_eq!(r["predicted_step_s"], c["predicted_stable_step_s"]);
+        }
+        // The fidelity map: (clearance, speed, chosen level, reason).
+        let rows = pane["fidelity"].as_array().unwrap();
+        assert_eq!(rows.len(), fidelity.len(), "{pane:#}");
+        for (r, c) in rows.iter().zip(fidelity) {
+            assert_eq!(r[0], c["clearance_mm"]);
+            assert_eq!(r[1], c["motor_rpm"]);
+            assert_eq!(r[2], c["chosen"]);
+            assert_eq!(r[3], c["reason"]);
+        }
+        // How methods fail: (what, method, outcome).
+        let rows = pane["failures"].as_array().unwrap();
+        assert_eq!(rows.len(), failures.len(), "{pane:#}");
+        for (r, c) in rows.iter().zip(failures) {
+            assert_eq!(r[0], c["what"]);
+            assert_eq!(r[1], c["method"]);
+            assert_eq!(r[2], c["outcome"]);
+        }
+    }
+}
