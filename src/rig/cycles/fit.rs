@@ -219,13 +219,3 @@ pub(super) fn fit_phase(
     };
     Some(crate::solver::roots::golden_min(lo, hi, 40, cost))
 }
-
-pub(super) struct Bound {
-    pub(super) index: u64,
-    pub(super) t0: i64,
-    pub(super) t1: i64,
-    pub(super) theta_tdc: f64,
-    /// Crank angle minus TDC at the cycle's start and end marks (degrees).
-    pub(super) mismatch_deg: Option<f64>,
-    pub(super) mismatch_end_deg: Option<f64>,
-}

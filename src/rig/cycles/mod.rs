@@ -36,11 +36,15 @@
 //!   from metadata `force_tare_n` (a constant) when given, else the fitted
 //!   line is subtracted sample by sample.
 
+mod angle_offset;
+mod bounds;
 mod crank;
 mod fit;
 mod offsets;
 mod types;
 
+use angle_offset::angle_offset;
+use bounds::cycle_bounds;
 pub use crank::*;
 use fit::*;
 use offsets::{OffsetContext, force_tare, laser_zero};
@@ -178,142 +182,16 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
     let cyc_sig = log.signals.get(SignalKind::Cycle).filter(|c| c.len() >= 2);
 
     // --- angle offset ---
-    let mut ao = OffsetEstimate {
-        name: "angle offset".into(),
-        unit: "rad".into(),
-        applied: 0.0,
-        source: ValueSource::Default,
-        metadata: log.meta.angle_offset_rad,
-        estimate: None,
-        sigma: None,
-        systematic: None,
-        note: String::new(),
-    };
-    let mut est_method = "";
-    if let Some(c) = cyc_sig {
-        let offs: Vec<f64> = c
-            .t_ns
-            .iter()
-            .filter_map(|&t| crank.at(t))
-            .map(|th| wrap_pi(tdc - th))
-            .collect();
-        if !offs.is_empty() {
-            // Circular mean, robust to a few outliers (clock jumps): median of wrapped values.
-            let mut sorted = offs.clone();
-            sorted.sort_by(|a, b| a.total_cmp(b));
-            let med = sorted[sorted.len() / 2];
-            let close: Vec<f64> = offs
-                .iter()
-                .copied()
-                .filter(|o| wrap_pi(o - med).abs() < 2f64.to_radians())
-                .collect();
-            let (m, s) = mean_std(&close);
-            // A rig sampling in step with the crank sees the same encoder
-            // counts at every mark, so the spread can be ~0: the encoder's
-            // quantisation (Δ/√12) is the floor of the uncertainty.
-            let quantum = set.crank.encoder_quantum_rad();
-            let stat = if close.len() > 1 {
-                s / (close.len() as f64).sqrt()
-            } else {
-                f64::NAN
-            };
-            ao.estimate = Some(m);
-            ao.sigma = Some(stat.max(quantum));
-            est_method = "from the crank angle at the /rig/cycle marks";
-        }
-    }
-    if ao.estimate.is_none() {
-        if let Some(d) = log
-            .signals
-            .get(SignalKind::Displacement)
-            .filter(|d| d.len() > 100)
-        {
-            let stride = (d.len() / 20_000).max(1);
-            let mut th = Vec::new();
-            let mut dv = Vec::new();
-            for i in (0..d.len()).step_by(stride) {
-                if let Some(t) = crank.at(d.t_ns[i]) {
-                    th.push(t);
-                    dv.push(d.values[i]);
-                }
-            }
-            if let Some(phi) = fit_phase(&geom, &th, &dv, None) {
-                let k = 8;
-                let len = th.len() / k;
-                let parts: Vec<f64> = (0..k)
-                    .filter_map(|b| {
-                        fit_phase(
-                            &geom,
-                            &th[b * len..(b + 1) * len],
-                            &dv[b * len..(b + 1) * len],
-                            Some(phi),
-                        )
-                    })
-                    .collect();
-                let (_, s) = mean_std(&parts);
-                let quantum = set.crank.encoder_quantum_rad();
-                ao.estimate = Some(wrap_pi(phi));
-                ao.sigma = Some((s / (parts.len().max(1) as f64).sqrt()).max(quantum));
-                est_method = "from the displacement signal (phase of the best fit to the ideal stroke; biased by the sensor lag, ω·τ)";
-            }
-        }
-    }
-    let est_text = match (ao.estimate, ao.sigma) {
-        (Some(e), Some(s)) => format!(
-            "{:.3}° ± {:.3}° ({est_method})",
-            e.to_degrees(),
-            s.to_degrees()
-        ),
-        _ => "not estimable".to_string(),
-    };
-    if let Some(o) = opts.angle_offset_rad {
-        ao.applied = o;
-        ao.source = ValueSource::Override;
-        ao.note = format!(
-            "session override {:.3}°; estimate {est_text}",
-            o.to_degrees()
-        );
-    } else if let Some(m) = log.meta.angle_offset_rad {
-        ao.applied = m;
-        ao.source = ValueSource::Metadata;
-        ao.note = format!(
-            "metadata angle_offset_rad {:.3}°; estimate {est_text}",
-            m.to_degrees()
-        );
-        if let (Some(e), Some(s)) = (ao.estimate, ao.sigma) {
-            if wrap_pi(e - m).abs() > (3.0 * s).max(1f64.to_radians()) {
-                findings.push(angle_finding(
-                    Severity::Warning,
-                    format!(
-                        "metadata angle_offset_rad = {m} rad ({:.2}°) disagrees with the estimate {est_text}; the metadata value is used",
-                        m.to_degrees()
-                    ),
-                ));
-            }
-        }
-    } else if let (Some(e), Some(s)) = (ao.estimate, ao.sigma) {
-        let thr = (3.0 * s).max(1f64.to_radians());
-        if e.abs() > thr {
-            ao.applied = e;
-            ao.source = ValueSource::Estimated;
-            ao.note =
-                format!("no angle_offset_rad in the metadata: the estimate {est_text} is applied");
-            findings.push(angle_finding(
-                Severity::Warning,
-                format!("encoder zero is off: crank angle offset estimated at {est_text} and applied (no angle_offset_rad in the metadata)"),
-            ));
-        } else {
-            ao.note = format!(
-                "no angle_offset_rad in the metadata; estimate {est_text} is within max(3σ, 1°) of 0: the encoder is taken as calibrated (offset 0)"
-            );
-            findings.push(angle_finding(
-                Severity::Info,
-                format!("crank angle offset estimated at {est_text}: consistent with a calibrated encoder, 0 used"),
-            ));
-        }
-    } else {
-        ao.note = "no metadata and no estimate: 0 used".into();
-    }
+    let quantum = set.crank.encoder_quantum_rad();
+    let ao = angle_offset(
+        &crank,
+        cyc_sig,
+        log,
+        opts,
+        quantum,
+        angle_finding,
+        &mut findings,
+    );
     for th in crank.theta.iter_mut() {
         *th += ao.applied;
     }
@@ -321,95 +199,8 @@ pub fn analyse(log: &RigLog, opts: &CycleOptions) -> CycleSet {
     set.crank.revolutions = (crank.theta.last().copied().unwrap_or(0.0) - crank.theta[0]) / TAU;
 
     // --- cycle boundaries ---
-    let crossings = crank.crossings(tdc);
-    let mut bounds: Vec<Bound> = Vec::new();
-    if let Some(c) = cyc_sig {
-        set.source = CycleSource::Marks;
-        let marks: Vec<(i64, u64)> = c
-            .t_ns
-            .iter()
-            .zip(&c.values)
-            .map(|(&t, &v)| (t, v.max(0.0) as u64))
-            .collect();
-        for w in marks.windows(2) {
-            let ((ta, ia), (tb, ib)) = (w[0], w[1]);
-            let (Some(tha), Some(thb)) = (crank.at(ta), crank.at(tb)) else {
-                continue;
-            };
-            let nrev = ((tha - tdc) / TAU).round();
-            let theta_tdc = tdc + nrev * TAU;
-            let mismatch = (tha - theta_tdc).to_degrees();
-            let mismatch_end = wrap_pi(thb - tdc).to_degrees();
-            if ib == ia + 1 {
-                bounds.push(Bound {
-                    index: ia,
-                    t0: ta,
-                    t1: tb,
-                    theta_tdc,
-                    mismatch_deg: Some(mismatch),
-                    mismatch_end_deg: Some(mismatch_end),
-                });
-            } else if ib > ia + 1 {
-                // Missing marks: fill in from the angle when the revolutions match.
-                let inner: Vec<&(i64, i64)> = crossings
-                    .iter()
-                    .filter(|(t, _)| {
-                        *t > ta + (tb - ta) / (4 * (ib - ia) as i64)
-                            && *t < tb - (tb - ta) / (4 * (ib - ia) as i64)
-                    })
-                    .collect();
-                if inner.len() as u64 == ib - ia - 1 {
-                    let mut times = vec![ta];
-                    times.extend(inner.iter().map(|x| x.0));
-                    times.push(tb);
-                    for (k, p) in times.windows(2).enumerate() {
-                        bounds.push(Bound {
-                            index: ia + k as u64,
-                            t0: p[0],
-                            t1: p[1],
-                            theta_tdc: theta_tdc + k as f64 * TAU,
-                            mismatch_deg: (k == 0).then_some(mismatch),
-                            mismatch_end_deg: (k + 2 == times.len()).then_some(mismatch_end),
-                        });
-                    }
-                    findings.push(Finding::new(
-                        Severity::Info,
-                        FindingCode::Cycle,
-                        &file,
-                        Some(&c.topic),
-                        Some(Place::span(ta, tb)),
-                        format!("cycle marks {}..{} missing between {} and log_time {tb}: those cycles were delimited by the crank angle", ia + 1, ib - 1, fmt_time(ta, t_start)),
-                    ));
-                } else {
-                    findings.push(Finding::new(
-                        Severity::Warning,
-                        FindingCode::Cycle,
-                        &file,
-                        Some(&c.topic),
-                        Some(Place::span(ta, tb)),
-                        format!("cycle marks {}..{} missing between {} and log_time {tb} and the crank angle does not resolve them: cycles {ia}..{} skipped", ia + 1, ib - 1, fmt_time(ta, t_start), ib - 1),
-                    ));
-                }
-            }
-        }
-    } else {
-        set.source = CycleSource::Angle;
-        if let Some(&(_, n0)) = crossings.first() {
-            for w in crossings.windows(2) {
-                let ((ta, na), (tb, nb)) = (w[0], w[1]);
-                if nb == na + 1 {
-                    bounds.push(Bound {
-                        index: (na - n0) as u64,
-                        t0: ta,
-                        t1: tb,
-                        theta_tdc: tdc + na as f64 * TAU,
-                        mismatch_deg: None,
-                        mismatch_end_deg: None,
-                    });
-                }
-            }
-        }
-    }
+    let (source, bounds) = cycle_bounds(&crank, tdc, cyc_sig, &file, t_start, &mut findings);
+    set.source = source;
 
     // --- per-cycle resampling ---
     let disp = log
