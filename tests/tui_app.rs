@@ -296,7 +296,7 @@ fn an_opened_image_is_drawn_with_half_blocks_and_next_previous_work() {
     let dir = tempfile::tempdir().unwrap();
     for (i, name) in ["a.png", "b.png"].iter().enumerate() {
         let img = image::RgbImage::from_fn(64, 48, |x, y| {
-            if (x / 8 + y / 8 + i as u32) % 2 == 0 {
+            if (x / 8 + y / 8 + i as u32).is_multiple_of(2) {
                 image::Rgb([230, 230, 230])
             } else {
                 image::Rgb([20, 20, 20])

@@ -103,19 +103,18 @@ impl ParamArgs {
                     .map_err(|e| anyhow::anyhow!("parameter file {}: {e}", path.display()))?;
                 if let (Some(cli), Some(toml::Value::String(file))) =
                     (&self.preset, table.get("preset"))
+                    && cli != file
                 {
-                    if cli != file {
-                        bail!(
-                            "--preset {cli} conflicts with preset = \"{file}\" in {}",
-                            path.display()
-                        );
-                    }
+                    bail!(
+                        "--preset {cli} conflicts with preset = \"{file}\" in {}",
+                        path.display()
+                    );
                 }
                 let mut text_with_base = text.clone();
-                if table.get("preset").is_none() {
-                    if let Some(preset) = &self.preset {
-                        text_with_base = format!("preset = \"{preset}\"\n{text}");
-                    }
+                if table.get("preset").is_none()
+                    && let Some(preset) = &self.preset
+                {
+                    text_with_base = format!("preset = \"{preset}\"\n{text}");
                 }
                 Params::from_toml_str(&text_with_base)
                     .map_err(|e| anyhow::anyhow!("parameter file {}: {e}", path.display()))?

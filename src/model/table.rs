@@ -31,13 +31,13 @@ impl Table {
             if f < 0.0 {
                 return Err(format!("point {i}: force {f} N is negative"));
             }
-            if let Some(&(prev, _)) = pts.last() {
-                if d * 1e-3 <= prev {
-                    return Err(format!(
-                        "depths must increase strictly: point {i} at {d} mm follows {} mm",
-                        prev * 1e3
-                    ));
-                }
+            if let Some(&(prev, _)) = pts.last()
+                && d * 1e-3 <= prev
+            {
+                return Err(format!(
+                    "depths must increase strictly: point {i} at {d} mm follows {} mm",
+                    prev * 1e3
+                ));
             }
             pts.push((d * 1e-3, f));
         }

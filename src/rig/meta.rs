@@ -152,16 +152,16 @@ impl RigMeta {
         m.laser_zero_mm = bounded("laser_zero_mm", 1000.0, "a length within ±1000 mm");
         m.force_tare_n = bounded("force_tare_n", 1e6, "a force within ±1e6 N");
         m.angle_offset_rad = bounded("angle_offset_rad", 100.0, "an angle within ±100 rad");
-        if let Some(mat) = &m.material {
-            if !MATERIALS.contains(&mat.as_str()) {
-                findings.push(metadata_warning(
-                    file,
-                    format!(
-                        "material '{mat}' is not one the model knows ({})",
-                        MATERIALS.join(", ")
-                    ),
-                ));
-            }
+        if let Some(mat) = &m.material
+            && !MATERIALS.contains(&mat.as_str())
+        {
+            findings.push(metadata_warning(
+                file,
+                format!(
+                    "material '{mat}' is not one the model knows ({})",
+                    MATERIALS.join(", ")
+                ),
+            ));
         }
         m.raw = raw;
         m

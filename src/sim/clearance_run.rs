@@ -427,7 +427,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
     }
     while t < t_end {
         iter += 1;
-        if iter % 512 == 0 {
+        if iter.is_multiple_of(512) {
             if progress.is_cancelled() {
                 return Err(SimError::Cancelled);
             }

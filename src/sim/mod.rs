@@ -168,10 +168,10 @@ impl SimOptions {
         if !(self.atol >= 0.0) || !self.atol.is_finite() {
             return bad("atol", fmt_num(self.atol), "≥ 0");
         }
-        if let Some(h) = self.step {
-            if !(h > 0.0) || !h.is_finite() {
-                return bad("step", fmt_num(h), "> 0 s");
-            }
+        if let Some(h) = self.step
+            && (!(h > 0.0) || !h.is_finite())
+        {
+            return bad("step", fmt_num(h), "> 0 s");
         }
         if !(self.warmup >= 0.0) || !self.warmup.is_finite() {
             return bad("warmup", fmt_num(self.warmup), "≥ 0 revolutions");

@@ -163,7 +163,7 @@ impl StiffnessMonitor {
         boundary: f64,
         stats: &mut Stats,
     ) {
-        if stats.steps % Self::EVERY != 0 && self.suspected == 0 {
+        if !stats.steps.is_multiple_of(Self::EVERY) && self.suspected == 0 {
             return;
         }
         let mut num = 0.0;

@@ -378,11 +378,11 @@ impl App {
             p.push_str(text.trim_end_matches(['\n', '\r']));
             return;
         }
-        if self.pane == PaneId::Model {
-            if let Some(e) = self.ui.model.editing.as_mut() {
-                e.push_str(text.trim());
-                return;
-            }
+        if self.pane == PaneId::Model
+            && let Some(e) = self.ui.model.editing.as_mut()
+        {
+            e.push_str(text.trim());
+            return;
         }
         let paths = parse_dropped(text);
         if paths.is_empty() {
@@ -649,10 +649,10 @@ impl App {
                     KeyCode::Char('[') => s.jump_cycle(false, &cycles, full),
                     KeyCode::Char(']') => s.jump_cycle(true, &cycles, full),
                     KeyCode::Char(' ') => {
-                        if let Some(n) = names.get(s.selected) {
-                            if !s.hidden.remove(n) {
-                                s.hidden.insert(n.clone());
-                            }
+                        if let Some(n) = names.get(s.selected)
+                            && !s.hidden.remove(n)
+                        {
+                            s.hidden.insert(n.clone());
                         }
                     }
                     _ => {}

@@ -285,14 +285,14 @@ impl Recipe {
                 t.position_mm
             ));
         }
-        if let Some([lo, hi]) = t.tip_area {
-            if !(lo.is_finite() && hi.is_finite() && (0.0..1.0).contains(&lo) && hi > 1.0) {
-                return Err(format!(
-                    "tolerance.tip_area must be [low, high] with 0 <= low < 1 < high (got [{}, {}])",
-                    fmt_num(lo),
-                    fmt_num(hi)
-                ));
-            }
+        if let Some([lo, hi]) = t.tip_area
+            && !(lo.is_finite() && hi.is_finite() && (0.0..1.0).contains(&lo) && hi > 1.0)
+        {
+            return Err(format!(
+                "tolerance.tip_area must be [low, high] with 0 <= low < 1 < high (got [{}, {}])",
+                fmt_num(lo),
+                fmt_num(hi)
+            ));
         }
         if !(self.extras.min_area_ratio.is_finite() && self.extras.min_area_ratio > 0.0) {
             return Err("extras.min_area_ratio must be positive".into());

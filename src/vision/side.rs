@@ -190,10 +190,10 @@ pub fn inspect_side<P: Px>(
                 let mut top: Vec<f32> = prof[..3].to_vec();
                 let mut bot: Vec<f32> = prof[prof.len() - 3..].to_vec();
                 let (lo, hi) = (median_f32(&mut top), median_f32(&mut bot));
-                if hi - lo > 0.3 * contrast {
-                    if let Some(f) = first_rise(&prof, 0.5 * (lo + hi)) {
-                        edge_pts.push((xf, y0 as f64 + f));
-                    }
+                if hi - lo > 0.3 * contrast
+                    && let Some(f) = first_rise(&prof, 0.5 * (lo + hi))
+                {
+                    edge_pts.push((xf, y0 as f64 + f));
                 }
             }
         }

@@ -70,39 +70,38 @@ pub(super) fn angle_offset(
             est_method = "from the crank angle at the /rig/cycle marks";
         }
     }
-    if ao.estimate.is_none() {
-        if let Some(d) = log
+    if ao.estimate.is_none()
+        && let Some(d) = log
             .signals
             .get(SignalKind::Displacement)
             .filter(|d| d.len() > 100)
-        {
-            let stride = (d.len() / 20_000).max(1);
-            let mut th = Vec::new();
-            let mut dv = Vec::new();
-            for i in (0..d.len()).step_by(stride) {
-                if let Some(t) = crank.at(d.t_ns[i]) {
-                    th.push(t);
-                    dv.push(d.values[i]);
-                }
+    {
+        let stride = (d.len() / 20_000).max(1);
+        let mut th = Vec::new();
+        let mut dv = Vec::new();
+        for i in (0..d.len()).step_by(stride) {
+            if let Some(t) = crank.at(d.t_ns[i]) {
+                th.push(t);
+                dv.push(d.values[i]);
             }
-            if let Some(phi) = fit_phase(geom, &th, &dv, None) {
-                let k = 8;
-                let len = th.len() / k;
-                let parts: Vec<f64> = (0..k)
-                    .filter_map(|b| {
-                        fit_phase(
-                            geom,
-                            &th[b * len..(b + 1) * len],
-                            &dv[b * len..(b + 1) * len],
-                            Some(phi),
-                        )
-                    })
-                    .collect();
-                let (_, s) = mean_std(&parts);
-                ao.estimate = Some(wrap_pi(phi));
-                ao.sigma = Some((s / (parts.len().max(1) as f64).sqrt()).max(quantum));
-                est_method = "from the displacement signal (phase of the best fit to the ideal stroke; biased by the sensor lag, ω·τ)";
-            }
+        }
+        if let Some(phi) = fit_phase(geom, &th, &dv, None) {
+            let k = 8;
+            let len = th.len() / k;
+            let parts: Vec<f64> = (0..k)
+                .filter_map(|b| {
+                    fit_phase(
+                        geom,
+                        &th[b * len..(b + 1) * len],
+                        &dv[b * len..(b + 1) * len],
+                        Some(phi),
+                    )
+                })
+                .collect();
+            let (_, s) = mean_std(&parts);
+            ao.estimate = Some(wrap_pi(phi));
+            ao.sigma = Some((s / (parts.len().max(1) as f64).sqrt()).max(quantum));
+            est_method = "from the displacement signal (phase of the best fit to the ideal stroke; biased by the sensor lag, ω·τ)";
         }
     }
     let est_text = match (ao.estimate, ao.sigma) {
@@ -127,16 +126,16 @@ pub(super) fn angle_offset(
             "metadata angle_offset_rad {:.3}°; estimate {est_text}",
             m.to_degrees()
         );
-        if let (Some(e), Some(s)) = (ao.estimate, ao.sigma) {
-            if wrap_pi(e - m).abs() > (3.0 * s).max(1f64.to_radians()) {
-                findings.push(say(
+        if let (Some(e), Some(s)) = (ao.estimate, ao.sigma)
+            && wrap_pi(e - m).abs() > (3.0 * s).max(1f64.to_radians())
+        {
+            findings.push(say(
                     Severity::Warning,
                     format!(
                         "metadata angle_offset_rad = {m} rad ({:.2}°) disagrees with the estimate {est_text}; the metadata value is used",
                         m.to_degrees()
                     ),
                 ));
-            }
         }
     } else if let (Some(e), Some(s)) = (ao.estimate, ao.sigma) {
         let thr = (3.0 * s).max(1f64.to_radians());

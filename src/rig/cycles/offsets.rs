@@ -228,9 +228,10 @@ fn apply_source(
         est.applied = v;
         est.source = ValueSource::Metadata;
         est.note = format!("metadata {key}{kept}; estimate {est_text}");
-        if let (Some(e), Some(s)) = (est.estimate, est.sigma) {
-            if (e - v).abs() > allow(s) {
-                findings.push(finding(
+        if let (Some(e), Some(s)) = (est.estimate, est.sigma)
+            && (e - v).abs() > allow(s)
+        {
+            findings.push(finding(
                     Severity::Warning,
                     format!(
                         "metadata {key} = {} {unit} disagrees with {} {est_text}; the metadata value is used",
@@ -238,7 +239,6 @@ fn apply_source(
                         words.versus
                     ),
                 ));
-            }
         }
     } else if let Some(e) = est.estimate {
         est.applied = e;

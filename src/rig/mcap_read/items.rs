@@ -65,11 +65,11 @@ pub(super) fn visit_records<V: RecordVisitor>(
     let r = walk_records(buf, |opcode, body, _| {
         match opcode {
             op::MESSAGE => {
-                if let (Some(ch), Some(t)) = (u16_at(body, 0), u64_at(body, 6)) {
-                    if body.len() >= 22 {
-                        v.message(ch, t, &body[22..]);
-                        n += 1;
-                    }
+                if let (Some(ch), Some(t)) = (u16_at(body, 0), u64_at(body, 6))
+                    && body.len() >= 22
+                {
+                    v.message(ch, t, &body[22..]);
+                    n += 1;
                 }
             }
             op::SCHEMA => {
@@ -182,15 +182,15 @@ pub fn decode_item<V: RecordVisitor>(
                                 .map(|_| ())
                         })
                     };
-                    if let Err(e) = res {
-                        if *complete {
-                            return ItemOutcome::lost(
-                                FindingCode::ChunkDecompress,
-                                format!(
-                                    "chunk at byte {pos} ({compression}) cannot be decompressed ({e}); its messages are lost"
-                                ),
-                            );
-                        }
+                    if let Err(e) = res
+                        && *complete
+                    {
+                        return ItemOutcome::lost(
+                            FindingCode::ChunkDecompress,
+                            format!(
+                                "chunk at byte {pos} ({compression}) cannot be decompressed ({e}); its messages are lost"
+                            ),
+                        );
                     }
                     &scratch.buf
                 }

@@ -193,8 +193,8 @@ impl<'a> Walker<'a> {
             },
             op::DATA_END => {
                 self.scan.info.data_end = true;
-                if !self.scan.info.chunked && self.opts.validate_crcs {
-                    if let Some(saved) = u32_at(body, 0) {
+                if !self.scan.info.chunked && self.opts.validate_crcs
+                    && let Some(saved) = u32_at(body, 0) {
                         let calculated = crc32fast::hash(&self.b[..pos as usize]);
                         if saved != 0 && saved != calculated {
                             self.finding(
@@ -205,7 +205,6 @@ impl<'a> Walker<'a> {
                             );
                         }
                     }
-                }
             }
             op::CHUNK_INDEX => {
                 if let Ok(records::Record::ChunkIndex(ci)) = mcap::parse_record(opcode, body) {
@@ -498,11 +497,11 @@ pub fn scan(src: &Source, opts: &ReadOptions) -> Result<Scan, LogError> {
                         b.len(),
                         len.saturating_add(9)
                     );
-                    if opcode == op::CHUNK {
-                        if let Some(h) = chunk_head(&b[p + 9..]) {
-                            text.push_str("; the messages of the cut chunk that can still be decompressed are recovered");
-                            w.push_chunk(pos, have, h, false);
-                        }
+                    if opcode == op::CHUNK
+                        && let Some(h) = chunk_head(&b[p + 9..])
+                    {
+                        text.push_str("; the messages of the cut chunk that can still be decompressed are recovered");
+                        w.push_chunk(pos, have, h, false);
                     }
                     text.push_str(&format!("; every record before byte {pos} was read"));
                     w.finding(
@@ -582,10 +581,10 @@ pub fn scan(src: &Source, opts: &ReadOptions) -> Result<Scan, LogError> {
         if len > b.len() as u64 - c - 9 {
             continue;
         }
-        if let Some(h) = chunk_head(&b[p + 9..p + 9 + len as usize]) {
-            if (h.data_rel as u64).saturating_add(h.compressed_size) <= len {
-                w.push_chunk(c, 9 + len, h, true);
-            }
+        if let Some(h) = chunk_head(&b[p + 9..p + 9 + len as usize])
+            && (h.data_rel as u64).saturating_add(h.compressed_size) <= len
+        {
+            w.push_chunk(c, 9 + len, h, true);
         }
     }
     w.scan.items.sort_by_key(|i| i.offset);

@@ -110,17 +110,17 @@ pub(super) fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme)
         format!("{}, recipes {}", v.images, v.recipes.len()),
         theme,
     ));
-    if let Some(sel) = v.files.get(v.selected) {
-        if !sel.message.is_empty() {
-            // One line per finding (the selected file's warnings or error).
-            let w = detail_area.width.saturating_sub(4) as usize;
-            lines.push(Line::from(vec![
-                Span::styled(format!("{} ", sel.status), theme.status(&sel.status)),
-                Span::raw(trunc_left(&sel.path, w.saturating_sub(8))),
-            ]));
-            for m in sel.message.split(crate::panes::session::FINDING_SEP) {
-                lines.push(Line::styled(format!("  {}", trunc(m, w)), theme.muted()));
-            }
+    if let Some(sel) = v.files.get(v.selected)
+        && !sel.message.is_empty()
+    {
+        // One line per finding (the selected file's warnings or error).
+        let w = detail_area.width.saturating_sub(4) as usize;
+        lines.push(Line::from(vec![
+            Span::styled(format!("{} ", sel.status), theme.status(&sel.status)),
+            Span::raw(trunc_left(&sel.path, w.saturating_sub(8))),
+        ]));
+        for m in sel.message.split(crate::panes::session::FINDING_SEP) {
+            lines.push(Line::styled(format!("  {}", trunc(m, w)), theme.muted()));
         }
     }
     for l in &v.logs {
