@@ -92,7 +92,16 @@ pub fn read_image(path: &Path, r: &ImageRef) -> Result<LogImage, LogError> {
         message: format!("no chunk or message record at byte {}", r.item_offset),
     })?;
     let mut plans = Plans::default();
-    plans.insert(r.channel_id, ChannelPlan::Image { full: true });
+    plans.insert(
+        r.channel_id,
+        match &r.codec {
+            Some(codec) => ChannelPlan::BinaryImage {
+                codec: codec.clone(),
+                full: true,
+            },
+            None => ChannelPlan::Image { full: true },
+        },
+    );
     let mut dec = Decoder::new(Arc::new(plans), item.offset);
     let out = mcap_read::decode_item(
         b,

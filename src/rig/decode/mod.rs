@@ -15,6 +15,7 @@
 //! the stream as NaN so that time-stream checks (duplicates, gaps) see the
 //! message, and counted by kind; they are removed from the final arrays.
 
+pub mod binary;
 mod plan;
 
 pub use plan::*;
@@ -22,6 +23,7 @@ pub use plan::*;
 use super::channel_map::SignalSource;
 use super::json::{self, Num, Val};
 use super::mcap_read::{ChannelDef, RecordVisitor, SchemaDef};
+use binary::BinaryCodec;
 use std::sync::Arc;
 
 /// Maximum sample times remembered per kind of problem (for messages).
@@ -128,6 +130,33 @@ impl SigBuf {
         self.v.push(f64::NAN);
     }
 
+    /// A number from a binary message (NaN and infinities counted as invalid).
+    #[inline]
+    fn push_f64(&mut self, t: i64, x: f64, src: &SignalSource) {
+        let n = if x.is_nan() {
+            Num::NanToken
+        } else if x.is_infinite() {
+            Num::NonFinite
+        } else {
+            Num::Finite(x)
+        };
+        self.push(t, n, src);
+    }
+
+    fn wrong_shape_at(&mut self, t: i64, why: &str) {
+        self.wrong_shape += 1;
+        if self.wrong_shape_first.is_none() {
+            self.wrong_shape_first = Some((t, why.to_string()));
+        }
+    }
+
+    fn malformed_at(&mut self, t: i64, why: &str) {
+        self.malformed += 1;
+        if self.malformed_first.is_none() {
+            self.malformed_first = Some((t, why.to_string()));
+        }
+    }
+
     #[inline]
     fn push(&mut self, t: i64, n: Num, src: &SignalSource) {
         match n {
@@ -226,6 +255,8 @@ pub struct DecodeOut {
     layouts: Vec<LayoutEntry>,
     pub images: Vec<ImageEntry>,
     pub item_offset: u64,
+    /// Scratch of the binary (protobuf, CDR) decoders.
+    scratch: binary::Slots,
 }
 
 impl Decoder {
@@ -271,23 +302,23 @@ impl DecodeOut {
             }
         };
         // Fast path: the channel's learned layout (numbers only).
-        if shape != Shape::Block {
-            if let Some(e) = self.layouts.iter().find(|e| e.base == base) {
-                let mut vals: [&[u8]; 8] = [&[]; 8];
-                if e.layout.matches(data, &mut vals) {
-                    for (i, s) in signals.iter().enumerate() {
-                        let b = &mut self.sigs[base + i];
-                        b.messages += 1;
-                        match e.field_pos.get(i).copied().flatten() {
-                            Some(k) => b.push(t, Val::Num(vals[k]).num(), &s.src),
-                            None => {
-                                b.missing_field += 1;
-                                b.missing_field_first.get_or_insert(t);
-                            }
+        if shape != Shape::Block
+            && let Some(e) = self.layouts.iter().find(|e| e.base == base)
+        {
+            let mut vals: [&[u8]; 8] = [&[]; 8];
+            if e.layout.matches(data, &mut vals) {
+                for (i, s) in signals.iter().enumerate() {
+                    let b = &mut self.sigs[base + i];
+                    b.messages += 1;
+                    match e.field_pos.get(i).copied().flatten() {
+                        Some(k) => b.push(t, Val::Num(vals[k]).num(), &s.src),
+                        None => {
+                            b.missing_field += 1;
+                            b.missing_field_first.get_or_insert(t);
                         }
                     }
-                    return;
                 }
+                return;
             }
         }
         // One pass over the object: the mapped fields and the block fields.
@@ -326,20 +357,21 @@ impl DecodeOut {
             return;
         }
         let looks_block = values.is_some() && (t0.is_some() || dt.is_some());
-        if !looks_block && shape != Shape::Block && !self.layouts.iter().any(|e| e.base == base) {
-            if let Some((layout, keys)) = json::Layout::learn(data).filter(|(l, _)| l.values() <= 8)
-            {
-                // The last occurrence of a key wins, as in the scan above.
-                let field_pos = signals
-                    .iter()
-                    .map(|s| keys.iter().rposition(|k| json::key_is(k, &s.src.field)))
-                    .collect();
-                self.layouts.push(LayoutEntry {
-                    base,
-                    layout,
-                    field_pos,
-                });
-            }
+        if !looks_block
+            && shape != Shape::Block
+            && !self.layouts.iter().any(|e| e.base == base)
+            && let Some((layout, keys)) = json::Layout::learn(data).filter(|(l, _)| l.values() <= 8)
+        {
+            // The last occurrence of a key wins, as in the scan above.
+            let field_pos = signals
+                .iter()
+                .map(|s| keys.iter().rposition(|k| json::key_is(k, &s.src.field)))
+                .collect();
+            self.layouts.push(LayoutEntry {
+                base,
+                layout,
+                field_pos,
+            });
         }
         let is_block = match shape {
             Shape::Block => true,
@@ -352,20 +384,20 @@ impl DecodeOut {
             b.messages += 1;
             if is_block {
                 // A block topic names its field in the schema title.
-                if let Some(title) = title {
-                    if title != src.field {
-                        b.wrong_shape += 1;
-                        if b.wrong_shape_first.is_none() {
-                            b.wrong_shape_first = Some((
-                                t,
-                                format!(
-                                    "block schema title is '{title}', the map expects field '{}'",
-                                    src.field
-                                ),
-                            ));
-                        }
-                        continue;
+                if let Some(title) = title
+                    && title != src.field
+                {
+                    b.wrong_shape += 1;
+                    if b.wrong_shape_first.is_none() {
+                        b.wrong_shape_first = Some((
+                            t,
+                            format!(
+                                "block schema title is '{title}', the map expects field '{}'",
+                                src.field
+                            ),
+                        ));
                     }
+                    continue;
                 }
                 let (Some(t0v), Some(dtv), Some(Val::Array(arr))) = (t0, dt, values) else {
                     b.wrong_shape += 1;
@@ -427,6 +459,104 @@ impl DecodeOut {
                 }
             }
         }
+    }
+
+    /// The signals of one protobuf or CDR message (see [`binary`]).
+    fn decode_binary(
+        &mut self,
+        base: usize,
+        log_time: u64,
+        data: &[u8],
+        codec: &BinaryCodec,
+        signals: &[SignalPlan],
+    ) {
+        let Ok(t) = i64::try_from(log_time) else {
+            for i in 0..signals.len() {
+                self.sig(base, i).time_out_of_range += 1;
+            }
+            return;
+        };
+        let decoded = codec.decode(data, &mut self.scratch);
+        for (i, s) in signals.iter().enumerate() {
+            let b = &mut self.sigs[base + i];
+            b.messages += 1;
+            if let Err(e) = &decoded {
+                b.malformed_at(t, e);
+                continue;
+            }
+            match codec.signal(i, &self.scratch) {
+                binary::Extracted::Scalar(x) => b.push_f64(t, x, &s.src),
+                binary::Extracted::Missing => {
+                    b.missing_field += 1;
+                    b.missing_field_first.get_or_insert(t);
+                }
+                binary::Extracted::WrongShape(why) => b.wrong_shape_at(t, why),
+                binary::Extracted::Block {
+                    t0_ns,
+                    dt_ns,
+                    values,
+                } => {
+                    let (Some(t0n), Some(dtn)) = (t0_ns, dt_ns) else {
+                        b.wrong_shape_at(t, "block message without t0_ns and dt_ns");
+                        continue;
+                    };
+                    let (Ok(t0i), Ok(dti)) = (i64::try_from(t0n), i64::try_from(dtn)) else {
+                        b.time_out_of_range += 1;
+                        continue;
+                    };
+                    b.blocks += 1;
+                    if t0n != log_time {
+                        b.block_time_mismatch += 1;
+                        b.block_time_mismatch_first.get_or_insert((t, t0i));
+                    }
+                    for (k, v) in values.iter().enumerate() {
+                        let ts = t0i.saturating_add(dti.saturating_mul(k as i64));
+                        b.push_f64(ts, v.f64(), &s.src);
+                    }
+                }
+            }
+        }
+    }
+
+    /// One protobuf or CDR image message.
+    fn decode_binary_image(
+        &mut self,
+        ch: u16,
+        log_time: u64,
+        data: &[u8],
+        codec: &BinaryCodec,
+        full: bool,
+    ) {
+        let mut e = ImageEntry {
+            channel: ch,
+            log_time,
+            item_offset: self.item_offset,
+            frame_id: String::new(),
+            format: String::new(),
+            stamp_ns: None,
+            data_len: 0,
+            data: None,
+            error: None,
+        };
+        match codec.decode(data, &mut self.scratch) {
+            Err(err) => e.error = Some(err),
+            Ok(()) => {
+                let f = codec.image(&self.scratch);
+                e.frame_id = f.frame_id;
+                e.format = f.format;
+                e.stamp_ns = f.stamp_ns;
+                match f.data {
+                    None => e.error = Some("no `data` field".into()),
+                    Some(bytes) => {
+                        e.data_len = bytes.len() as u64;
+                        if full {
+                            e.data = Some(bytes.to_vec());
+                        }
+                    }
+                }
+            }
+        }
+        self.images.push(e);
     }
 
     fn decode_image(&mut self, ch: u16, log_time: u64, data: &[u8], full: bool) {
@@ -534,7 +664,17 @@ impl RecordVisitor for Decoder {
                 self.out
                     .decode_signals(*base, log_time, data, *shape, title.as_deref(), signals);
             }
+            ChannelPlan::Binary {
+                codec,
+                signals,
+                base,
+            } => self
+                .out
+                .decode_binary(*base, log_time, data, codec, signals),
             ChannelPlan::Image { full } => self.out.decode_image(channel_id, log_time, data, *full),
+            ChannelPlan::BinaryImage { codec, full } => self
+                .out
+                .decode_binary_image(channel_id, log_time, data, codec, *full),
             _ => {}
         }
     }

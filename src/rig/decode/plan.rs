@@ -1,9 +1,18 @@
 //! Which channel carries what: each channel's plan (a scalar field, blocks,
 //! images, ignored) from the channel map and the channel's schema.
 
+use super::binary::BinaryCodec;
 use crate::rig::channel_map::{ChannelMap, SignalKind, SignalSource};
 use crate::rig::mcap_read::{ChannelDef, SchemaDef};
 use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// Schema names of compressed camera images, by encoding.
+pub const IMAGE_SCHEMAS: [&str; 3] = [
+    "foxglove.CompressedImage",
+    "sensor_msgs/msg/CompressedImage",
+    "sensor_msgs/CompressedImage",
+];
 
 /// How messages of a channel are laid out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,10 +41,20 @@ pub enum ChannelPlan {
         /// Index of the first signal's buffer among all signal buffers (see [`Plans::slots`]).
         base: usize,
     },
+    /// Signals of a protobuf or ROS 2 (CDR) channel.
+    Binary {
+        codec: Arc<BinaryCodec>,
+        signals: Vec<SignalPlan>,
+        /// As for `Signals`.
+        base: usize,
+    },
     /// Camera images (foxglove.CompressedImage in JSON); `full` keeps the decoded bytes.
     Image { full: bool },
-    /// Mapped, but in an encoding pinsight cannot decode.
-    Undecodable,
+    /// Camera images in protobuf (foxglove.CompressedImage) or ROS 2 (sensor_msgs/CompressedImage).
+    BinaryImage { codec: Arc<BinaryCodec>, full: bool },
+    /// Mapped, but pinsight cannot decode it: the reason (an unknown
+    /// encoding, a schema that does not parse, a field the schema lacks).
+    Undecodable(String),
     /// Not used: messages are only counted.
     Ignore,
 }
@@ -91,8 +110,15 @@ impl Plans {
         if sigs.is_empty() && !is_image_topic {
             return ChannelPlan::Ignore;
         }
+        if BinaryCodec::handles(ch) {
+            return Self::binary_plan(ch, schema, &sigs, full_images);
+        }
         if ch.message_encoding != "json" {
-            return ChannelPlan::Undecodable;
+            let schema_enc = schema.map_or("none", |s| s.encoding.as_str());
+            return ChannelPlan::Undecodable(format!(
+                "message encoding '{}' (schema encoding '{schema_enc}') cannot be decoded (pinsight reads json, protobuf and ros2msg/cdr)",
+                ch.message_encoding
+            ));
         }
         if sigs.is_empty() {
             return ChannelPlan::Image { full: full_images };
@@ -117,6 +143,48 @@ impl Plans {
         }
     }
 
+    /// The plan of a protobuf or ROS 2 channel: its codec, or why there is none.
+    fn binary_plan(
+        ch: &ChannelDef,
+        schema: Option<&SchemaDef>,
+        sigs: &[(SignalKind, &SignalSource)],
+        full_images: bool,
+    ) -> ChannelPlan {
+        if sigs.is_empty() {
+            return Self::binary_image_plan(ch, schema, full_images);
+        }
+        let paths: Vec<&str> = sigs.iter().map(|(_, s)| s.field.as_str()).collect();
+        match BinaryCodec::for_signals(ch, schema, &paths) {
+            Ok(codec) => ChannelPlan::Binary {
+                codec: Arc::new(codec),
+                signals: sigs
+                    .iter()
+                    .map(|(kind, src)| SignalPlan {
+                        kind: *kind,
+                        src: (*src).clone(),
+                    })
+                    .collect(),
+                base: 0,
+            },
+            Err(e) => ChannelPlan::Undecodable(e),
+        }
+    }
+
+    /// The plan of a protobuf or ROS 2 image channel.
+    pub fn binary_image_plan(
+        ch: &ChannelDef,
+        schema: Option<&SchemaDef>,
+        full_images: bool,
+    ) -> ChannelPlan {
+        match BinaryCodec::for_images(ch, schema) {
+            Ok(codec) => ChannelPlan::BinaryImage {
+                codec: Arc::new(codec),
+                full: full_images,
+            },
+            Err(e) => ChannelPlan::Undecodable(format!("camera images: {e}")),
+        }
+    }
+
     pub fn build(
         channels: &BTreeMap<u16, ChannelDef>,
         schemas: &BTreeMap<u16, SchemaDef>,
@@ -136,7 +204,9 @@ impl Plans {
         if self.plans.len() <= i {
             self.plans.resize(i + 1, None);
         }
-        if let ChannelPlan::Signals { signals, base, .. } = &mut plan {
+        if let ChannelPlan::Signals { signals, base, .. }
+        | ChannelPlan::Binary { signals, base, .. } = &mut plan
+        {
             *base = self.slots.len();
             for s in signals.iter() {
                 self.slots.push((id, s.clone()));

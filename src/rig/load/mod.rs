@@ -1,7 +1,8 @@
 //! [`load`]: the single entry point that reads a rig log into plain data.
 
 use super::channel_map::{ChannelMap, SignalKind};
-use super::decode::{ChanCount, ChannelPlan, Decoder, ImageEntry, Plans, SigBuf};
+use super::decode::binary::BinaryCodec;
+use super::decode::{ChanCount, ChannelPlan, Decoder, IMAGE_SCHEMAS, ImageEntry, Plans, SigBuf};
 use super::error::LogError;
 use super::mcap_read::{
     self, ChannelDef, ContainerInfo, ItemKind, ReadOptions, SchemaDef, Scratch, Source, WorkItem,
@@ -92,6 +93,10 @@ pub struct ImageRef {
     pub item_offset: u64,
     pub channel_id: u16,
     pub error: Option<String>,
+    /// The channel's decoder when its images are protobuf or ROS 2 (to
+    /// decode one again without the summary); None for JSON.
+    #[serde(skip)]
+    pub codec: Option<Arc<BinaryCodec>>,
 }
 
 /// The signals of a log (None = not in the file / not mapped).
@@ -276,13 +281,20 @@ fn build_plans(
     let mut p = Plans::build(channels, schemas, map, full_images);
     // Images are recognised by schema too, whatever their topic.
     for c in channels.values() {
-        if matches!(p.get(c.id), Some(ChannelPlan::Ignore))
-            && c.message_encoding == "json"
-            && schemas
-                .get(&c.schema_id)
-                .is_some_and(|s| s.name == "foxglove.CompressedImage")
+        let schema = schemas.get(&c.schema_id);
+        if !matches!(p.get(c.id), Some(ChannelPlan::Ignore))
+            || !schema.is_some_and(|s| IMAGE_SCHEMAS.contains(&s.name.as_str()))
         {
+            continue;
+        }
+        if c.message_encoding == "json" {
             p.insert(c.id, ChannelPlan::Image { full: full_images });
+        } else if BinaryCodec::handles(c) {
+            // An image topic nobody mapped that does not compile stays ignored.
+            let plan = Plans::binary_image_plan(c, schema, full_images);
+            if matches!(plan, ChannelPlan::BinaryImage { .. }) {
+                p.insert(c.id, plan);
+            }
         }
     }
     p
@@ -426,7 +438,10 @@ pub(crate) fn load_inner(
             .iter()
             .map(|(k, _)| k.name().to_string())
             .collect();
-        if matches!(st.plans.get(c.id), Some(ChannelPlan::Image { .. })) {
+        if matches!(
+            st.plans.get(c.id),
+            Some(ChannelPlan::Image { .. } | ChannelPlan::BinaryImage { .. })
+        ) {
             used_as.push("images".into());
         }
         let span_s = (cnt.last.saturating_sub(cnt.first)) as f64 * 1e-9;
@@ -482,20 +497,11 @@ pub(crate) fn load_inner(
                     .push(Finding::new(sev, code, &file, Some(&label), None, text));
             }
             Some(s) if !present => {
-                let undecodable: Vec<&ChannelDef> = st
-                    .channels
-                    .values()
-                    .filter(|c| {
-                        c.topic == s.topic
-                            && matches!(st.plans.get(c.id), Some(ChannelPlan::Undecodable))
-                    })
-                    .collect();
-                if let Some(c) = undecodable.first() {
-                    let schema_enc = st
-                        .schemas
-                        .get(&c.schema_id)
-                        .map(|x| x.encoding.clone())
-                        .unwrap_or_default();
+                let undecodable = st.channels.values().find_map(|c| match st.plans.get(c.id) {
+                    Some(ChannelPlan::Undecodable(why)) if c.topic == s.topic => Some(why),
+                    _ => None,
+                });
+                if let Some(why) = undecodable {
                     let label = format!("{} ({})", s.topic, kind.name());
                     st.findings.push(Finding::new(
                         Severity::Warning,
@@ -503,11 +509,7 @@ pub(crate) fn load_inner(
                         &file,
                         Some(&label),
                         None,
-                        format!(
-                            "message encoding '{}' (schema encoding '{schema_enc}') cannot be decoded (pinsight reads json); {} is unavailable",
-                            c.message_encoding,
-                            kind.name()
-                        ),
+                        format!("{why}; {} is unavailable", kind.name()),
                     ));
                 }
             }
@@ -693,6 +695,10 @@ pub(crate) fn load_inner(
             item_offset: e.item_offset,
             channel_id: e.channel,
             error: e.error.clone(),
+            codec: match st.plans.get(e.channel) {
+                Some(ChannelPlan::BinaryImage { codec, .. }) => Some(codec.clone()),
+                _ => None,
+            },
         });
     }
     if !images.is_empty() {
