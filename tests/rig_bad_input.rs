@@ -285,7 +285,9 @@ fn unknown_message_encoding_missing_and_misnamed_channels() {
     assert_eq!(miss.len(), 1);
     assert!(miss[0].contains("/rig/displacement") && miss[0].contains("/rig/displacment"));
     assert!(l.report.has(FindingCode::UnusedChannel));
-    assert!(l.signals.force.is_none() && l.signals.displacement.is_none());
+    let samples = |s: &Option<pinsight::rig::signals::Signal>| s.as_ref().map_or(0, |s| s.len());
+    assert_eq!(samples(&l.signals.force), 0);
+    assert_eq!(samples(&l.signals.displacement), 0);
     assert_eq!(
         l.stats_of(SignalKind::Angle).unwrap().samples,
         count(&log, "/rig/spindle")
@@ -581,4 +583,62 @@ proptest! {
             Err(e) => prop_assert!(e.to_string().contains("fuzz.mcap")),
         }
     }
+}
+
+/// Issue 17's bad binary input: a protobuf schema that does not parse, CDR
+/// messages that do not match their ros2msg schema, and an encoding pinsight
+/// does not read. Each is a finding naming the channel and the place; the
+/// rest of the log still loads.
+#[test]
+fn bad_schemas_messages_and_encodings_are_findings_and_the_rest_loads() {
+    let mut log = make(&cfg());
+    let ch = |log: &SynthLog, topic: &str| log.channel_index(topic).unwrap();
+    let force = ch(&log, "/rig/force");
+    log.channels[force].schema_encoding = "protobuf".into();
+    log.channels[force].message_encoding = "protobuf".into();
+    log.channels[force].schema = "not a FileDescriptorSet".into();
+    let disp = ch(&log, "/rig/displacement");
+    log.channels[disp].schema_encoding = "ros2msg".into();
+    log.channels[disp].message_encoding = "cdr".into();
+    log.channels[disp].schema = "float64 displacement_mm\n".into();
+    let mut first_disp = None;
+    for m in log.messages.iter_mut().filter(|m| m.channel == disp) {
+        // Little-endian CDR with 6 of the 8 bytes of the float64.
+        m.data = vec![0, 1, 0, 0, 1, 2, 3, 4, 5, 6];
+        first_disp.get_or_insert(m.log_time);
+    }
+    let cyc = ch(&log, "/rig/cycle");
+    log.channels[cyc].message_encoding = "flatbuffer".into();
+    let l = load_bytes("bad-enc.mcap", bytes(&log, &small_chunks())).unwrap();
+
+    let unknown = findings(&l, FindingCode::UnknownEncoding);
+    let about = |topic: &str| {
+        unknown
+            .iter()
+            .find(|f| f.contains(topic))
+            .unwrap_or_else(|| panic!("no finding about {topic}: {unknown:?}"))
+            .clone()
+    };
+    assert!(about("/rig/force").contains("not a valid FileDescriptorSet"));
+    assert!(about("/rig/cycle").contains("'flatbuffer'"));
+    let bad = findings(&l, FindingCode::MalformedMessage);
+    assert_eq!(bad.len(), 1, "{bad:?}");
+    assert!(
+        bad[0].contains("/rig/displacement")
+            && bad[0].contains("do not decode against the channel's schema")
+            && bad[0].contains("does not match its schema"),
+        "{}",
+        bad[0]
+    );
+    // The spindle is untouched: angle and speed load in full, and cycles
+    // come from the angle.
+    assert_eq!(
+        l.signals.angle.as_ref().unwrap().len() as u64,
+        count(&log, "/rig/spindle")
+    );
+    let samples = |s: &Option<pinsight::rig::signals::Signal>| s.as_ref().map_or(0, |s| s.len());
+    assert_eq!(samples(&l.signals.force), 0);
+    assert_eq!(samples(&l.signals.displacement), 0);
+    let cs = pinsight::rig::analyse(&l, &pinsight::rig::CycleOptions::default());
+    assert!(cs.cycles.len() >= 2, "{}", cs.cycles.len());
 }

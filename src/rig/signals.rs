@@ -310,12 +310,18 @@ pub fn finish(
     }
     if buf.malformed > 0 {
         let (t, e) = buf.malformed_first.clone().unwrap_or((0, String::new()));
+        // Binary decoders name their encoding at the start of the reason.
+        let what = if e.starts_with("protobuf") || e.starts_with("cdr") {
+            "do not decode against the channel's schema"
+        } else {
+            "are not valid JSON"
+        };
         push(
             Severity::Warning,
             FindingCode::MalformedMessage,
             Some(Place::time(t)),
             format!(
-                "{} message(s) are not valid JSON and were skipped; first at {}: {e}",
+                "{} message(s) {what} and were skipped; first at {}: {e}",
                 buf.malformed,
                 fmt_time(t, t0)
             ),
