@@ -21,6 +21,7 @@
 //! | [`fmt`] | numbers as messages name them |
 //! | [`plant`] | plant scale: `--shard k/n` partition of a batch (Kubernetes Indexed Jobs, Slurm arrays) |
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
+//! | [`export`] | results in other tools' formats: MCAP that Foxglove shows (overlay, inspections, simulations) |
 //! | [`output`] | every file written: atomic single files, multi-file reports complete or unchanged |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
 //! | [`panes`] | view models: one pure function per pane from session state to plain data |
@@ -35,6 +36,7 @@
 pub mod batch;
 pub mod cli;
 pub mod engine;
+pub mod export;
 pub mod fmt;
 pub mod input;
 pub mod methods;

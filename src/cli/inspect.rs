@@ -44,6 +44,9 @@ pub struct Args {
     /// the cluster's environment (docs/scale.md).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
+    /// Also write every image with its annotations (pins, grid, verdict) as MCAP for Foxglove.
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
 }
 
 /// Command-line names of the localisers.
@@ -182,6 +185,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let shard =
         crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
     let (items, mut results) = crate::plant::shard::split_collected(shard, items, results);
+    let unreadable = results.len();
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
@@ -236,6 +240,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(mut rep) = report {
         rep.add("inspection.json", &serde_json::to_vec_pretty(&results)?)?;
         rep.commit()?;
+    }
+    if let Some(file) = &args.mcap {
+        use crate::export::mcap::inspection::{Frame, inspections_mcap};
+        // The inputs that never became images come first, then one result per item.
+        let frames: Vec<Frame> = results
+            .iter()
+            .enumerate()
+            .map(|(i, r)| Frame::of(i.checked_sub(unreadable).and_then(|k| items.get(k)), r))
+            .collect();
+        let bytes =
+            inspections_mcap(&frames).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+        crate::output::write_file(file, &bytes)?;
     }
     let errors = results
         .iter()

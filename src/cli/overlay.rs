@@ -42,6 +42,12 @@ pub struct Args {
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Also write the overlay as MCAP for Foxglove (measured vs predicted stroke and force on the log's clock, per-cycle residuals).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+    /// With --mcap: copy the log's own messages into the file too.
+    #[arg(long, requires = "mcap")]
+    pub mcap_signals: bool,
     #[command(flatten)]
     pub log_read: super::common::LogReadArgs,
     /// Simulated revolutions in the predicted ensemble (clearance level).
@@ -169,6 +175,21 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     report.notes.extend(extra_notes);
     if let Some(dir) = &args.out {
         write_outputs(dir, &report)?;
+    }
+    if let Some(file) = &args.mcap {
+        // The log is mapped, not read (it may be large).
+        let src = if args.mcap_signals {
+            Some(crate::rig::mcap_read::Source::open(&args.log)?)
+        } else {
+            None
+        };
+        let bytes = crate::export::mcap::overlay::overlay_mcap(
+            &report,
+            &cs,
+            src.as_ref().map(|s| s.bytes()),
+        )
+        .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+        crate::output::write_file(file, &bytes)?;
     }
     if args.json {
         outln!("{}", serde_json::to_string_pretty(&report)?)?;

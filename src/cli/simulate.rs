@@ -53,6 +53,9 @@ pub struct Args {
     /// Print one JSON object instead of the text summary.
     #[arg(long)]
     pub json: bool,
+    /// Also write the run (state at every grid step, contact events, summary) as MCAP for Foxglove.
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -89,7 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         step: args.step,
         warmup: args.warmup,
         revs: args.revs,
-        grid_deg: args.csv.as_ref().map(|_| args.grid_deg),
+        grid_deg: (args.csv.is_some() || args.mcap.is_some()).then_some(args.grid_deg),
         record_events: true,
         ..SimOptions::default()
     };
@@ -115,6 +118,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .write_csv(&mut buf)
             .with_context(|| format!("writing {}", path.display()))?;
         crate::output::write_file(path, &buf)?;
+    }
+    if let Some(path) = &args.mcap {
+        let bytes = crate::export::mcap::simulation::simulation_mcap(&result)
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        crate::output::write_file(path, &bytes)?;
     }
     if args.json {
         let v = to_json(

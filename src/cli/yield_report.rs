@@ -47,6 +47,31 @@ pub struct Args {
     /// SLURM_ARRAY_TASK_ID + SLURM_ARRAY_TASK_COUNT (docs/scale.md).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
+    /// Also write every inspected image with its annotations as MCAP for Foxglove.
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+}
+
+/// The inspected images and their annotations as MCAP (inputs and results
+/// in the same order).
+fn write_mcap(
+    file: &std::path::Path,
+    inputs: &[YieldInput],
+    results: &[crate::vision::batch::ItemResult],
+) -> anyhow::Result<()> {
+    use crate::export::mcap::inspection::{Frame, inspections_mcap};
+    let frames: Vec<Frame> = inputs
+        .iter()
+        .zip(results)
+        .map(|(i, r)| match i {
+            YieldInput::Image(item) => Frame::of(Some(item), r),
+            YieldInput::Failed(_) => Frame::of(None, r),
+        })
+        .collect();
+    let bytes =
+        inspections_mcap(&frames).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    crate::output::write_file(file, &bytes)?;
+    Ok(())
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -81,6 +106,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         pool.install(|| run_yield_inputs(&inputs, &book, &opts, args.by, &progress))
     };
     let (rep, results) = (run.report, run.results);
+    if let Some(file) = &args.mcap {
+        write_mcap(file, &inputs, &results)?;
+    }
     let title = format!(
         "Yield report: {}",
         book.recipes

@@ -282,6 +282,7 @@ fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
         clearance_mm: m.clearance_mm,
         cycle: None,
         log: Some(shown.to_string()),
+        log_time_ns: None,
     };
     let image_refs = log.images.clone();
     let attachments: Vec<(String, String)> = log
@@ -318,6 +319,7 @@ fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
         };
         let meta = ItemMeta {
             cycle: r.cycle,
+            log_time_ns: Some(r.log_time_ns),
             ..item_meta.clone()
         };
         let read = match path {

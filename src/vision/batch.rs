@@ -38,6 +38,11 @@ pub struct ItemMeta {
     pub cycle: Option<u64>,
     /// The rig log the image came from.
     pub log: Option<String>,
+    /// The image's log_time in that log (ns since the Unix epoch); not in
+    /// the reports (the cycle names the image there), used to stamp it in
+    /// an MCAP export.
+    #[serde(skip)]
+    pub log_time_ns: Option<u64>,
 }
 
 /// One image to inspect.
@@ -194,6 +199,7 @@ fn add_file(path: &Path, items: &mut Vec<Item>, errors: &mut Vec<ItemResult>) {
                 clearance_mm: log.meta.clearance_mm,
                 cycle: None,
                 log: Some(name.clone()),
+                log_time_ns: None,
             };
             if log.images.is_empty() {
                 let why = if problems.is_empty() {
@@ -224,6 +230,7 @@ fn add_file(path: &Path, items: &mut Vec<Item>, errors: &mut Vec<ItemResult>) {
                     source: Source::Bytes(Arc::new(img.data)),
                     meta: ItemMeta {
                         cycle: img.cycle,
+                        log_time_ns: Some(img.log_time_ns),
                         ..base.clone()
                     },
                 });
