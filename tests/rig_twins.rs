@@ -7,7 +7,7 @@
 //! velocity), converted back to rpm, so its figures agree to a few ulps.
 
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 fn root() -> &'static Path {
@@ -29,9 +29,15 @@ fn logs() -> Vec<String> {
 
 /// `pinsight ARGS --json` as JSON.
 fn run(args: &[&str]) -> Value {
+    let mut a = args.to_vec();
+    a.push("--json");
+    run_raw(&a)
+}
+
+/// `pinsight ARGS`, whose output is JSON.
+fn run_raw(args: &[&str]) -> Value {
     let out = Command::new(env!("CARGO_BIN_EXE_pinsight"))
         .args(args)
-        .arg("--json")
         .current_dir(root())
         .output()
         .unwrap();
@@ -183,4 +189,28 @@ fn twins_carry_the_same_images() {
             );
         }
     }
+}
+
+/// The TUI's path (the engine lists a log's images and decodes each on
+/// demand, by its codec): the Yield pane rendered headless gives the same
+/// report for the JSON log and its twins.
+#[test]
+fn twins_give_the_same_yield_pane() {
+    let [json, pb, ros] = variants("run-2000-images");
+    let recipe = "fixtures/interop/images/hdr-2x10.toml";
+    let pane = |file: &str| {
+        let v = run_raw(&["render", "yield", file, recipe, "--format", "json"]);
+        let r = &v["report"];
+        assert_eq!(r["items"], 10, "{file}");
+        serde_json::json!([
+            r["passed"],
+            r["failed"],
+            r["errors"],
+            r["dppm"],
+            r["pins_inspected"]
+        ])
+    };
+    let expected = pane(&json.0);
+    assert_eq!(pane(&pb.0), expected);
+    assert_eq!(pane(&ros.0), expected);
 }
