@@ -27,7 +27,6 @@ use super::mcap_read::{ChannelDef, RecordVisitor, SchemaDef};
 use binary::BinaryCodec;
 use std::sync::Arc;
 
-
 /// The visitor: decodes the messages of one work item.
 pub struct Decoder {
     pub plans: Arc<Plans>,
@@ -486,8 +485,8 @@ impl RecordVisitor for Decoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rig::channel_map::SignalSource;
     use crate::rig::channel_map::SignalKind;
+    use crate::rig::channel_map::SignalSource;
 
     fn plans_for(shape: Shape, title: Option<&str>, kinds: &[(SignalKind, &str)]) -> Plans {
         let mut p = Plans::default();
