@@ -15,6 +15,7 @@
 //! | [`sim`] | the simulation protocol (warmup + reported revolutions), summary figures, ensembles, prediction horizon, the parameter sweep |
 //! | [`rig`] | rig logs: MCAP loading, channel maps, signals, cycles |
 //! | [`overlay`] | measured vs predicted per cycle, residuals, calibration |
+//! | [`process`] | process monitoring: evaluation objects on each cycle's force curve (OK/NOK with reasons), SPC (Cp/Cpk, X̄/R, run rules) |
 //! | [`vision`] | connector images: recipes, pin detection, grid fit, verdicts, yield |
 //! | [`methods`] | the methods lab: work–precision, stability, fidelity |
 //! | [`engine`] | the one layer under the faces: loading every input, running every job |
@@ -46,6 +47,7 @@ pub mod overlay;
 pub mod panes;
 pub mod plant;
 pub mod plot;
+pub mod process;
 pub mod progress;
 pub mod rig;
 pub mod rng;

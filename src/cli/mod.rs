@@ -10,6 +10,7 @@ pub mod common;
 pub mod inspect;
 pub mod log;
 pub mod methods;
+pub mod monitor;
 pub mod overlay;
 pub mod render;
 pub mod simulate;
@@ -41,6 +42,8 @@ pub enum Command {
     Log(log::Args),
     /// Compare a rig log's cycles with the model's prediction.
     Overlay(overlay::Args),
+    /// Judge every cycle's force curve against a process recipe (OK/NOK with reasons) and its SPC.
+    Monitor(monitor::Args),
     /// Fit clearance, standoff, process load and sensor offsets to a rig log.
     Calibrate(calibrate::Args),
     /// Inspect connector images against a recipe.
@@ -83,6 +86,7 @@ pub fn main() -> ExitCode {
         Some(Command::Sweep(a)) => sweep::run(a),
         Some(Command::Log(a)) => log::run(a),
         Some(Command::Overlay(a)) => overlay::run(a),
+        Some(Command::Monitor(a)) => monitor::run(a),
         Some(Command::Calibrate(a)) => calibrate::run(a),
         Some(Command::Inspect(a)) => inspect::run(a),
         Some(Command::Yield(a)) => yield_report::run(a),

@@ -4,7 +4,7 @@
 //! It loads every kind of input into typed entries with their findings
 //! ([`load`], [`entries`]) and runs every job to a serialisable result
 //! ([`model`]: simulate, study, methods lab; [`vision`]: inspect, yield;
-//! [`overlay`]: measured against predicted). The faces only parse options,
+//! [`overlay`]: measured against predicted; [`process`]: the monitor). The faces only parse options,
 //! call a job, and print, draw or check its result, so the same inputs give
 //! the same answer whichever face asked.
 //!
@@ -15,5 +15,6 @@ pub mod entries;
 pub mod load;
 pub mod model;
 pub mod overlay;
+pub mod process;
 pub mod signals;
 pub mod vision;

@@ -1,5 +1,5 @@
 //! Results as MCAP that Foxglove shows with no configuration (issue 17):
-//! `--mcap FILE` on `overlay`, `inspect`, `yield` and `simulate`.
+//! `--mcap FILE` on `overlay`, `monitor`, `inspect`, `yield` and `simulate`.
 //!
 //! Foxglove's own message types (`foxglove.CompressedImage`,
 //! `foxglove.ImageAnnotations`) are written with the official Foxglove SDK
@@ -13,6 +13,7 @@
 //! command writes it atomically (`crate::output::write_file`).
 
 pub mod inspection;
+pub mod monitor;
 pub mod overlay;
 pub mod simulation;
 

@@ -105,7 +105,7 @@ pub enum CycleSource {
 }
 
 /// One crank revolution, TDC to TDC.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct Cycle {
     pub index: u64,
     pub t_start_ns: i64,

@@ -1,0 +1,105 @@
+//! `pinsight monitor LOG... --process R.toml [--learn N] [--json | --csv |
+//! --out DIR] [--mcap FILE]`: every cycle's force curve judged against the
+//! process recipe's evaluation objects (OK / NOK with reasons / not
+//! evaluated), and the SPC of the value checks (see [`crate::process`]).
+//!
+//! `-r RECIPE` (vision recipes) joins each connector's photograph in the
+//! log with its cycle's verdict: the confusion of process NOK against
+//! vision fail, and the connectors where they disagree.
+//!
+//! `--learn N` first learns the recipe's envelopes from the first N good
+//! cycles and writes the recipe back (atomically), then monitors with it.
+//!
+//! Exit code: 0 when every cycle is OK; 1 when a cycle is NOK or could not
+//! be evaluated (a cycle without force data is never OK); 3 when a log
+//! could not be monitored (the others are still reported).
+
+use crate::cli::common::{outln, outp};
+use crate::engine::process::{learn_from_logs, monitor_logs};
+use crate::process::ProcessRecipe;
+use crate::process::report::{connectors_csv, cycles_csv, spc_csv, summary_text};
+use crate::progress::{Progress, ProgressBarGuard};
+use crate::vision::batch::RecipeBook;
+use anyhow::anyhow;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Rig logs (MCAP).
+    #[arg(required = true, value_name = "LOG.mcap")]
+    pub logs: Vec<PathBuf>,
+    /// The process recipe (TOML: windows, thresholds, envelopes, value checks).
+    #[arg(long, value_name = "RECIPE.toml")]
+    pub process: PathBuf,
+    /// Vision recipes (files or folders): inspect each connector's photograph in the log
+    /// and join it with its cycle's verdict (the connector's whole story).
+    #[arg(short = 'r', long = "recipe", value_name = "RECIPE.toml")]
+    pub recipes: Vec<PathBuf>,
+    /// Learn the recipe's envelopes from the first N good cycles and save them into the recipe.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    pub learn: Option<u32>,
+    /// Print the run as JSON.
+    #[arg(long, conflicts_with = "csv")]
+    pub json: bool,
+    /// Print one CSV row per cycle.
+    #[arg(long)]
+    pub csv: bool,
+    /// Write monitor.json, cycles.csv and spc.csv into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Also write the verdicts as MCAP for Foxglove (with the log's own messages).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+    #[command(flatten)]
+    pub log_read: super::common::LogReadArgs,
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let mut recipe = ProcessRecipe::load(&args.process).map_err(|e| anyhow!("{e}"))?;
+    let opts = args.log_read.load_options()?;
+    let progress = Progress::new(0);
+    let quiet = args.json || args.csv;
+    let _bar = (!quiet).then(|| ProgressBarGuard::start(progress.clone(), "monitor"));
+    let mut learned = None;
+    if let Some(n) = args.learn {
+        let (r, note) = learn_from_logs(&recipe, &args.logs, &opts, n as usize, &progress)
+            .map_err(anyhow::Error::msg)?;
+        crate::output::write_file(&args.process, r.to_toml().as_bytes())?;
+        recipe = r;
+        learned = Some(format!("{note}; saved to {}", args.process.display()));
+    }
+    let book = (!args.recipes.is_empty()).then(|| RecipeBook::load(&args.recipes));
+    let mut run = monitor_logs(&recipe, &args.logs, &opts, book.as_ref(), &progress);
+    run.learned = learned;
+    drop(_bar);
+    if let Some(dir) = &args.out {
+        let mut rep = crate::output::Report::new_in(dir)?;
+        rep.add("monitor.json", &serde_json::to_vec_pretty(&run)?)?;
+        rep.add("cycles.csv", cycles_csv(&run).as_bytes())?;
+        rep.add("spc.csv", spc_csv(&run).as_bytes())?;
+        if run.confusion.is_some() {
+            rep.add("connectors.csv", connectors_csv(&run).as_bytes())?;
+        }
+        rep.commit()?;
+    }
+    if let Some(file) = &args.mcap {
+        let bytes = crate::export::mcap::monitor::monitor_mcap(&run, &args.logs)
+            .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+        crate::output::write_file(file, &bytes)?;
+    }
+    if args.json {
+        outln!("{}", serde_json::to_string_pretty(&run)?)?;
+    } else if args.csv {
+        outp!("{}", cycles_csv(&run))?;
+    } else {
+        outp!("{}", summary_text(&run))?;
+    }
+    Ok(if run.logs.iter().any(|l| l.report.is_err()) {
+        ExitCode::from(3)
+    } else if run.nok > 0 || run.not_evaluated > 0 {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
