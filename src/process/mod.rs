@@ -13,6 +13,8 @@
 //! - [`report`]: the run as text and CSV;
 //! - [`story`]: each connector's whole story (process verdict, vision
 //!   verdict, the model's band) and the confusion of the two verdicts;
+//! - [`synth`]: a faulty line for tests and demos (insertion faults in the
+//!   force curve, the connectors' photographs, the truth of both);
 //! - [`spc`]: capability (Cp, Cpk, Pp, Ppk), X̄/R and I-MR charts, the
 //!   Western Electric rules.
 //!
@@ -27,6 +29,7 @@ pub mod report;
 pub mod run;
 pub mod spc;
 pub mod story;
+pub mod synth;
 
 pub use monitor::{CycleStatus, CycleVerdict, MonitorReport, learn, monitor};
 pub use recipe::ProcessRecipe;

@@ -25,6 +25,7 @@
 //! clearance-joint model's simulated trajectory (the fixtures calibration is
 //! tested on).
 
+pub mod faults;
 mod truth;
 mod write;
 

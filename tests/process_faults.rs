@@ -1,0 +1,270 @@
+//! Issue 16's targets on faulty lines (`pinsight::process::synth`): logs
+//! whose cycles carry insertion faults of random kind and size, on heads
+//! whose speed and sensors are drawn at random too (every factor at once),
+//! judged by `pinsight monitor` with the fixture recipe
+//! `fixtures/process/side-1x6.process.toml` after learning its envelope on
+//! the log's first good cycles. The truth is the generator's draw, never
+//! the monitor's own output:
+//! - process NOK recall ≥ 99 % over the faulty cycles, false NOK ≤ 0.5 %
+//!   over the good ones;
+//! - with the connectors' photographs, the report's confusion table
+//!   (process NOK × vision fail) equals the truth file's, connector by
+//!   connector.
+
+use pinsight::process::synth::{FaultyLineConfig, LineTruth, faulty_line};
+use pinsight::rig::synth::faults::{FaultRates, InsertionFault};
+use pinsight::rig::synth::{SynthConfig, WriteSettings, write};
+use pinsight::vision::Recipe;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn pinsight(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_pinsight"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn recipe() -> Recipe {
+    Recipe::load(&root().join("fixtures/vision/side-1x6.toml")).unwrap()
+}
+
+/// Writes a faulty line into `dir`, returns the log's path and its truth.
+fn write_line(dir: &Path, name: &str, cfg: &FaultyLineConfig) -> (PathBuf, LineTruth) {
+    let (log, truth) = faulty_line(cfg);
+    let mut cur = std::io::Cursor::new(Vec::new());
+    write(&log, &mut cur, &WriteSettings::default()).unwrap();
+    let p = dir.join(format!("{name}.mcap"));
+    std::fs::write(&p, cur.into_inner()).unwrap();
+    (p, truth)
+}
+
+/// The fixture recipe with its envelope learned on the log's first 40 good cycles.
+fn learned_recipe(dir: &Path, log: &Path) -> PathBuf {
+    let r = dir.join(format!(
+        "{}.process.toml",
+        log.file_stem().unwrap().to_string_lossy()
+    ));
+    std::fs::copy(root().join("fixtures/process/side-1x6.process.toml"), &r).unwrap();
+    let (code, out, err) = pinsight(&[
+        "monitor",
+        log.to_str().unwrap(),
+        "--process",
+        r.to_str().unwrap(),
+        "--learn",
+        "40",
+        "--csv",
+    ]);
+    assert!(code == 0 || code == 1, "{out}{err}");
+    r
+}
+
+/// A head drawn at random: speed, encoder, ripple, laser and load-cell
+/// noise, lags and zeros all at once.
+fn random_head(seed: u64, cycles: f64) -> SynthConfig {
+    let mut r = pinsight::rng::SplitMix64::<0x7E57_0016>::new(seed);
+    SynthConfig {
+        motor_rpm: r.range(1000.0, 2000.0),
+        revolutions: cycles + 1.6,
+        start_theta: std::f64::consts::PI + r.range(0.05, 0.95) * std::f64::consts::TAU,
+        encoder_counts: [2048, 4096, 8192][(r.uniform() * 3.0) as usize % 3],
+        speed_ripple: r.range(0.0, 0.01),
+        ripple_phase: r.range(0.0, std::f64::consts::TAU),
+        speed_noise: r.range(0.0, 0.005),
+        laser_zero_mm: r.range(8.0, 12.0),
+        laser_lag_s: 1.0 / (std::f64::consts::TAU * r.range(2000.0, 5000.0)),
+        laser_noise_mm: r.range(0.0005, 0.004),
+        force_lag_s: 1.0 / (std::f64::consts::TAU * r.range(800.0, 3000.0)),
+        force_noise_n: r.range(0.02, 0.12),
+        force_tare_n: r.range(-0.3, 0.3),
+        force_drift_n: r.range(-0.1, 0.1),
+        seed,
+        ..SynthConfig::default()
+    }
+}
+
+#[test]
+fn nok_recall_and_false_nok_over_random_heads() {
+    let dir = tempfile::tempdir().unwrap();
+    // (fault kind → (caught, drawn)); good cycles (flagged, seen).
+    let mut per_fault: BTreeMap<InsertionFault, (usize, usize)> = BTreeMap::new();
+    let (mut false_nok, mut good) = (0usize, 0usize);
+    let mut rows = Vec::new();
+    for seed in 1..=6u64 {
+        let cfg = FaultyLineConfig {
+            rig: random_head(seed, 220.0),
+            rates: FaultRates::default(),
+            recipe: recipe(),
+            debris_rate: 0.0,
+            images: false,
+        };
+        let (log, truth) = write_line(dir.path(), &format!("head{seed}"), &cfg);
+        let r = learned_recipe(dir.path(), &log);
+        let (code, json, err) = pinsight(&[
+            "monitor",
+            log.to_str().unwrap(),
+            "--process",
+            r.to_str().unwrap(),
+            "--json",
+        ]);
+        assert_eq!(code, 1, "{err}");
+        let run: Value = serde_json::from_str(&json).unwrap();
+        let cycles = run["logs"][0]["report"]["Ok"]["cycles"].as_array().unwrap();
+        let by_index: BTreeMap<u64, &Value> = cycles
+            .iter()
+            .map(|c| (c["index"].as_u64().unwrap(), c))
+            .collect();
+        // Every connector of the truth is a complete cycle of the log.
+        assert_eq!(by_index.len(), truth.connectors.len(), "seed {seed}");
+        for t in &truth.connectors {
+            let v = by_index[&t.cycle];
+            let nok = v["status"] == "nok";
+            assert_ne!(
+                v["status"], "not_evaluated",
+                "seed {seed} cycle {}",
+                t.cycle
+            );
+            match t.fault {
+                Some(f) => {
+                    let e = per_fault.entry(f).or_default();
+                    e.1 += 1;
+                    if nok {
+                        e.0 += 1;
+                    } else {
+                        rows.push(format!(
+                            "seed {seed} cycle {} {f:?} missed: {:?}",
+                            t.cycle, t.draw
+                        ));
+                    }
+                }
+                None => {
+                    good += 1;
+                    if nok {
+                        false_nok += 1;
+                        rows.push(format!(
+                            "seed {seed} cycle {} good called NOK: {}",
+                            t.cycle, v["failed"]
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    let (caught, drawn) = per_fault
+        .values()
+        .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let recall = caught as f64 / drawn as f64;
+    let false_rate = false_nok as f64 / good as f64;
+    println!("per fault (caught, drawn): {per_fault:?}; good {good}, false NOK {false_nok}");
+    for r in rows.iter().take(40) {
+        println!("  {r}");
+    }
+    assert!(drawn >= 200 && good >= 900, "{drawn} {good}");
+    for f in InsertionFault::ALL {
+        assert!(
+            per_fault.get(&f).is_some_and(|e| e.1 >= 30),
+            "{f:?}: {per_fault:?}"
+        );
+    }
+    assert!(recall >= 0.99, "recall {recall}");
+    assert!(false_rate <= 0.005, "false NOK {false_rate}");
+}
+
+#[test]
+fn the_connectors_story_matches_the_truth_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for seed in [3u64, 11] {
+        let cfg = FaultyLineConfig {
+            rig: random_head(seed + 100, 60.0),
+            rates: FaultRates {
+                fault_rate: 0.3,
+                ..FaultRates::default()
+            },
+            recipe: recipe(),
+            debris_rate: 0.12,
+            images: true,
+        };
+        let (log, truth) = write_line(dir.path(), &format!("story{seed}"), &cfg);
+        let r = learned_recipe(dir.path(), &log);
+        let out = dir.path().join(format!("out{seed}"));
+        let (code, json, err) = pinsight(&[
+            "monitor",
+            log.to_str().unwrap(),
+            "--process",
+            r.to_str().unwrap(),
+            "-r",
+            "fixtures/vision/side-1x6.toml",
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 1, "{err}");
+        let run: Value = serde_json::from_str(&json).unwrap();
+        let story = &run["logs"][0]["story"];
+        let got: Vec<(u64, String, String)> = story["connectors"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| {
+                (
+                    c["cycle"].as_u64().unwrap(),
+                    c["process"].as_str().unwrap().to_string(),
+                    c["vision"].as_str().unwrap_or("none").to_string(),
+                )
+            })
+            .collect();
+        let want: Vec<(u64, String, String)> = truth
+            .connectors
+            .iter()
+            .map(|c| {
+                (
+                    c.cycle,
+                    if c.process_nok { "nok" } else { "ok" }.to_string(),
+                    serde_json::to_value(c.vision)
+                        .unwrap()
+                        .as_str()
+                        .unwrap()
+                        .to_string(),
+                )
+            })
+            .collect();
+        assert_eq!(got, want, "seed {seed}");
+        let confusion: pinsight::process::story::Confusion =
+            serde_json::from_value(run["confusion"].clone()).unwrap();
+        assert_eq!(confusion, truth.confusion, "seed {seed}");
+        // Both kinds of disagreement occur and are listed with reasons.
+        assert!(
+            truth.confusion.process_ok_vision_fail > 0,
+            "{:?}",
+            truth.confusion
+        );
+        let csv = std::fs::read_to_string(out.join("connectors.csv")).unwrap();
+        assert_eq!(csv.lines().count(), truth.connectors.len() + 1);
+        for c in truth
+            .connectors
+            .iter()
+            .filter(|c| c.debris && !c.process_nok)
+        {
+            let row = csv
+                .lines()
+                .find(|l| l.split(',').nth(1) == Some(&c.cycle.to_string()))
+                .unwrap();
+            assert!(
+                row.contains(",ok,fail,false,") && row.contains("dust"),
+                "{row}"
+            );
+        }
+    }
+}
