@@ -116,6 +116,22 @@ fn base(sub: &str, sandbox: &Path) -> Base {
             vec![],
         ),
         "methods" => (vec![], vec![o("out", out("methods"))], vec![]),
+        "monitor" => {
+            // --learn writes the recipe back: a copy in the sandbox.
+            let r = sandbox.join("process.toml");
+            if !r.exists() {
+                std::fs::copy(f.join("process/hdr-2x10.process.toml"), &r).unwrap();
+            }
+            (
+                vec![p(&log)],
+                vec![
+                    o("process", p(&r)),
+                    o("recipe", p(&recipe)),
+                    o("out", out("monitor")),
+                ],
+                vec![],
+            )
+        }
         // Without a terminal the TUI refuses after reading its options.
         "tui" => (vec![], vec![], vec![]),
         "render" => (

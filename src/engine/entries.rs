@@ -23,6 +23,7 @@ pub enum FileKind {
     RigLog,
     Image,
     Recipe,
+    ProcessRecipe,
     Params,
     Folder,
     Unknown,
@@ -34,6 +35,7 @@ impl FileKind {
             FileKind::RigLog => "rig log",
             FileKind::Image => "image",
             FileKind::Recipe => "recipe",
+            FileKind::ProcessRecipe => "process recipe",
             FileKind::Params => "parameters",
             FileKind::Folder => "folder",
             FileKind::Unknown => "unknown",
@@ -123,6 +125,8 @@ pub enum Loaded {
     Params(FileEntry, Box<Params>),
     Log(FileEntry, Box<LogEntry>),
     Recipe(FileEntry, Box<RecipeEntry>),
+    /// A process recipe (evaluation objects of a part's press-in curve).
+    Process(FileEntry, Box<crate::process::ProcessRecipe>),
     Image(FileEntry, Box<ImageEntry>),
 }
 
@@ -133,6 +137,7 @@ impl Loaded {
             | Loaded::Params(e, _)
             | Loaded::Log(e, _)
             | Loaded::Recipe(e, _)
+            | Loaded::Process(e, _)
             | Loaded::Image(e, _) => e,
         }
     }

@@ -450,6 +450,38 @@ pub fn load_toml_text(name: &str, text: &str) -> Loaded {
             "",
         ));
     }
+    let process_keys = ["window", "threshold", "envelope", "value", "spc"];
+    if table.contains_key("part_number")
+        && !table.contains_key("view")
+        && process_keys.iter().any(|k| table.contains_key(*k))
+    {
+        return match crate::process::ProcessRecipe::from_toml_str(text, name) {
+            Ok(r) => Loaded::Process(
+                entry(
+                    name,
+                    FileKind::ProcessRecipe,
+                    FileStatus::Loaded,
+                    format!(
+                        "process recipe, part {}: {} object(s){}",
+                        r.part_number,
+                        r.object_count(),
+                        if r.envelope.iter().any(|e| e.x_grid.is_empty()) {
+                            " (an envelope not learned yet: `pinsight monitor LOG --process FILE --learn N`)"
+                        } else {
+                            ""
+                        }
+                    ),
+                ),
+                Box::new(r),
+            ),
+            Err(e) => Loaded::Entry(entry(
+                name,
+                FileKind::ProcessRecipe,
+                FileStatus::Error(one_line(&e.to_string())),
+                "",
+            )),
+        };
+    }
     if table.contains_key("part_number") || table.contains_key("view") {
         return match crate::vision::Recipe::from_toml_str(text, name) {
             Ok(r) => {

@@ -18,6 +18,8 @@ pub use crate::engine::model::{
     MethodsLab, ModelRun, StudySetup, predicted_signals, run_methods, run_model, run_study,
 };
 pub use crate::engine::overlay::{OverlayRun, run_overlay};
+pub use crate::engine::process::monitor_session;
+pub use crate::process::run::MonitorRun;
 pub use crate::engine::signals::{Channel, SignalSet};
 pub use crate::engine::vision::{Inspected, YieldRun, inspect_image, recipe_book, run_yield};
 use crate::model::params::Params;
@@ -58,6 +60,11 @@ pub struct Session {
     pub yields: Option<YieldRun>,
     /// Measured-vs-predicted comparisons by log index.
     pub overlays: std::collections::BTreeMap<usize, OverlayRun>,
+    /// Process recipes (evaluation objects per part number).
+    pub process_recipes: Vec<crate::process::ProcessRecipe>,
+    /// The process monitor over the logs (None: not run, or inputs changed
+    /// since), or why it could not run.
+    pub monitor: Option<Result<MonitorRun, String>>,
 }
 
 impl Default for Session {
@@ -89,6 +96,8 @@ impl Session {
             inspections: Default::default(),
             yields: None,
             overlays: Default::default(),
+            process_recipes: Vec::new(),
+            monitor: None,
         }
     }
 
@@ -117,6 +126,12 @@ impl Session {
                 Loaded::Log(e, log) => {
                     self.files.push(e);
                     self.logs.push(*log);
+                    self.monitor = None;
+                }
+                Loaded::Process(e, r) => {
+                    self.files.push(e);
+                    self.process_recipes.push(*r);
+                    self.monitor = None;
                 }
                 Loaded::Recipe(e, r) => {
                     self.files.push(e);
@@ -124,11 +139,13 @@ impl Session {
                     // Another recipe can change which one an image gets.
                     self.inspections.clear();
                     self.yields = None;
+                    self.monitor = None;
                 }
                 Loaded::Image(e, img) => {
                     self.files.push(e);
                     self.images.push(*img);
                     self.yields = None;
+                    self.monitor = None;
                 }
             }
         }
@@ -284,6 +301,19 @@ impl Session {
     /// The overlay of log `i`, if it ran.
     pub fn overlay_of(&self, i: usize) -> Option<&OverlayRun> {
         self.overlays.get(&i)
+    }
+
+    /// Runs the process monitor over the logs now (with the vision recipes,
+    /// each connector's story), reporting to (and stopped by) `progress`.
+    pub fn run_monitor_with(&mut self, progress: &Progress) {
+        let book = (!self.recipes.is_empty()).then(|| self.recipe_book());
+        self.monitor = Some(monitor_session(
+            &self.process_recipes,
+            &self.logs,
+            &self.images,
+            book.as_ref(),
+            progress,
+        ));
     }
 
     /// Runs the overlay of log `i` now.
