@@ -398,3 +398,48 @@ fn the_quick_methods_lab_is_one_answer_from_cli_and_the_methods_pane() {
         }
     }
 }
+
+#[test]
+fn the_monitor_is_one_answer_from_cli_the_line_pane_and_batch_with_a_damaged_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // The interop head's process recipe (envelope learned on the images
+    // log's first 5 cycles), the images' vision recipe, a log with camera
+    // images and a log cut at 60 % of its bytes.
+    let process = d.join("hdr.process.toml");
+    std::fs::copy(repo("fixtures/process/hdr-2x10.process.toml"), &process).unwrap();
+    let vision = repo("fixtures/interop/images/hdr-2x10.toml");
+    let logs = [
+        repo("fixtures/interop/logs/run-2000-images.mcap"),
+        repo("fixtures/interop/logs/run-1200-truncated.mcap"),
+    ];
+    let (p, v) = (process.to_str().unwrap(), vision.to_str().unwrap());
+    let (l0, l1) = (logs[0].to_str().unwrap(), logs[1].to_str().unwrap());
+    let o = bin()
+        .args(["monitor", l0, "--process", p, "--learn", "5", "--csv"])
+        .output()
+        .unwrap();
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{o:?}");
+    let mut cli = run_json(&["monitor", l0, l1, "--process", p, "-r", v, "--json"], d);
+    let mut render =
+        run_json(&["render", "line", l0, l1, p, v, "--format", "json"], d)["run"].take();
+    let mut batch = batch_export(d, &[l0, l1, p, v], "line")["run"].take();
+    for v in [&mut cli, &mut render, &mut batch] {
+        without_timings(v);
+    }
+    let logs_out = cli["logs"].as_array().unwrap();
+    assert_eq!(logs_out.len(), 2);
+    // The images' log tells each connector's story; the damaged log is
+    // monitored on the cycles it still holds.
+    let story = &logs_out[0]["story"];
+    assert_eq!(story["connectors"].as_array().unwrap().len(), 10, "{story}");
+    assert!(cli["confusion"].is_object());
+    let cut = logs_out[1]["report"]["Ok"]["cycles"]
+        .as_array()
+        .unwrap()
+        .len();
+    assert!((5..20).contains(&cut), "{cut}");
+    // (Not assert_eq!: a difference would print megabytes.)
+    assert!(render == cli, "render line differs from pinsight monitor");
+    assert!(batch == cli, "batch export differs from pinsight monitor");
+}

@@ -149,6 +149,9 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     t.wait_for("stroke — cycle 0", 10.0);
     t.keys(&["8"]);
     t.wait_for("Charts (", 30.0); // the quick methods lab ran in the background
+    // The Line pane: the demo log's 20 cycles against its process recipe.
+    t.keys(&["9"]);
+    t.wait_for("20 OK", 30.0);
     t.keys(&["Tab"]);
     t.wait_for("Metadata", 10.0);
     // Help overlay.

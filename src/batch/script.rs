@@ -24,7 +24,7 @@
 //! study = { clearances_mm = [0.1, 0.5], speeds_rpm = [1200], materials = ["alloy_steel"], warmup = 1, revs = 1 }
 //!
 //! [[step]]
-//! kind = "run"                       # model | study | methods | yield | overlay
+//! kind = "run"                       # model | study | methods | yield | overlay | monitor
 //! what = "model"
 //!
 //! [[step]]
@@ -478,7 +478,7 @@ impl Runner {
                     index,
                     "run",
                     "",
-                    "give `what` (model, study, methods, yield or overlay)",
+                    "give `what` (model, study, methods, yield, overlay or monitor)",
                 );
             }
             Err(e) => return err(index, "run", "", e),
@@ -570,11 +570,48 @@ impl Runner {
                     ok(index, "run", "overlay", msgs.join("; "))
                 }
             }
+            "monitor" => {
+                let start = std::time::Instant::now();
+                self.session.run_monitor_with(&self.progress.child());
+                match &self.session.monitor {
+                    Some(Ok(m)) => {
+                        let failed: Vec<String> = m
+                            .logs
+                            .iter()
+                            .filter_map(|l| {
+                                l.report.as_ref().err().map(|e| format!("{}: {e}", l.file))
+                            })
+                            .collect();
+                        let d = format!(
+                            "{}: {} OK, {} NOK, {} not evaluated, {:.0} ms",
+                            m.part_number,
+                            m.ok,
+                            m.nok,
+                            m.not_evaluated,
+                            start.elapsed().as_secs_f64() * 1e3
+                        );
+                        if failed.is_empty() {
+                            ok(index, "run", "monitor", d)
+                        } else {
+                            err(
+                                index,
+                                "run",
+                                "monitor",
+                                format!("{d}; {}", failed.join("; ")),
+                            )
+                        }
+                    }
+                    Some(Err(e)) => err(index, "run", "monitor", e.clone()),
+                    None => err(index, "run", "monitor", "the monitor did not run"),
+                }
+            }
             other => err(
                 index,
                 "run",
                 other,
-                format!("cannot run `{other}` (allowed: model, study, methods, yield, overlay)"),
+                format!(
+                    "cannot run `{other}` (allowed: model, study, methods, yield, overlay, monitor)"
+                ),
             ),
         }
     }

@@ -72,7 +72,11 @@ pub fn monitor_log(
     if cs.cycles.is_empty() {
         rep.notes.push("no complete cycle in the log".into());
     }
-    let story = photos.map(|(inputs, book)| {
+    if photos.is_some_and(|(inputs, _)| inputs.is_empty()) {
+        rep.notes
+            .push("no connector photographs in the log: no process × vision story".into());
+    }
+    let story = photos.filter(|(i, _)| !i.is_empty()).map(|(inputs, book)| {
         let run = run_yield_inputs(
             inputs,
             book,
@@ -118,17 +122,13 @@ pub fn monitor_logs(
             progress.set_message(format!("monitor: {}", p.display()));
             let out = match cycles_of_log(p, opts, progress) {
                 Ok((log, cs)) => {
+                    // The log's photographs (as the session lists them:
+                    // one item per camera image; a log without any gives
+                    // none, not an error item as `yield` does).
                     let photos = vision.map(|book| {
-                        let (items, unreadable) = collect_items(&[p.to_path_buf()]);
-                        let inputs: Vec<YieldInput> = items
-                            .into_iter()
-                            .map(YieldInput::Image)
-                            .chain(
-                                unreadable
-                                    .into_iter()
-                                    .map(|r| YieldInput::Failed(Box::new(r))),
-                            )
-                            .collect();
+                        let (items, _) = collect_items(&[p.to_path_buf()]);
+                        let inputs: Vec<YieldInput> =
+                            items.into_iter().map(YieldInput::Image).collect();
                         (inputs, book)
                     });
                     monitor_log(

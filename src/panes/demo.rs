@@ -6,6 +6,8 @@
 //!   and displacement as blocks; written from the reference clearance
 //!   simulation, so the Overlay pane's comparison is meaningful; the small
 //!   `fixtures/logs/synth-*` logs come from the ideal mechanism instead);
+//! - the process recipe of the log's part (`fixtures/process/`), its
+//!   envelope learned on the log's first cycles, for the Line pane;
 //! - four connector images of four parts (two top-view headers, a round-pin
 //!   header, a side view) and their recipes; the images name no part number,
 //!   so the vision library recognises each part among the recipes.
@@ -65,6 +67,13 @@ pub const RECIPES: [(&str, &str); 4] = [
     ),
 ];
 
+/// The process recipe of the demo log's part (its envelope learned on the
+/// log's first 10 cycles), so the Line pane shows the monitor.
+pub const PROCESS_RECIPE: (&str, &str) = (
+    "demo/hdr-2x10.process.toml",
+    include_str!("../../fixtures/process/demo-hdr-2x10.process.toml"),
+);
+
 impl Session {
     /// The embedded demo session (see [`session`]).
     pub fn demo() -> Self {
@@ -82,6 +91,7 @@ pub fn session() -> Session {
     for (name, text) in RECIPES {
         s.absorb(vec![load_toml_text(name, text)]);
     }
+    s.absorb(vec![load_toml_text(PROCESS_RECIPE.0, PROCESS_RECIPE.1)]);
     for (name, bytes) in IMAGES {
         s.absorb(vec![load_image_bytes(
             name,
@@ -102,6 +112,7 @@ mod tests {
         assert!(s.load_errors().is_empty(), "{:?}", s.load_errors());
         assert_eq!(s.logs.len(), 1);
         assert_eq!(s.recipes.len(), RECIPES.len());
+        assert_eq!(s.process_recipes.len(), 1);
         assert_eq!(s.images.len(), IMAGES.len());
         // The log's truth file: 20 complete cycles.
         let (_, cycles) = s.logs[0].rig.as_ref().unwrap();

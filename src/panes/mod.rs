@@ -16,9 +16,11 @@
 //! | Vision | [`vision`] | a connector image with pins by verdict, per-pin table |
 //! | Yield | [`yields`] | batch yield, confidence interval, Pareto, worst pins |
 //! | Methods | [`methods`] | work–precision and stability charts |
+//! | Line | [`line`] | process monitor: cycles OK/NOK with reasons, the press curve against its objects, SPC with Cpk bands, run-rule alarms, process × vision |
 
 pub mod chart;
 pub mod demo;
+pub mod line;
 pub mod methods;
 pub mod model;
 pub mod overlay;
@@ -33,7 +35,7 @@ use crate::plot::Panel;
 use serde::Serialize;
 pub use session::Session;
 
-/// The panes, in tab order (number keys 1–8).
+/// The panes, in tab order (number keys 1–9).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PaneId {
@@ -45,10 +47,11 @@ pub enum PaneId {
     Vision,
     Yield,
     Methods,
+    Line,
 }
 
 impl PaneId {
-    pub const ALL: [PaneId; 8] = [
+    pub const ALL: [PaneId; 9] = [
         PaneId::Session,
         PaneId::Signals,
         PaneId::Overlay,
@@ -57,6 +60,7 @@ impl PaneId {
         PaneId::Vision,
         PaneId::Yield,
         PaneId::Methods,
+        PaneId::Line,
     ];
 
     pub fn name(self) -> &'static str {
@@ -69,6 +73,7 @@ impl PaneId {
             PaneId::Vision => "vision",
             PaneId::Yield => "yield",
             PaneId::Methods => "methods",
+            PaneId::Line => "line",
         }
     }
 
@@ -82,6 +87,7 @@ impl PaneId {
             PaneId::Vision => "Vision",
             PaneId::Yield => "Yield",
             PaneId::Methods => "Methods",
+            PaneId::Line => "Line",
         }
     }
 
@@ -117,6 +123,7 @@ pub struct PaneState {
     pub vision: vision::VisionUi,
     pub yields: yields::YieldUi,
     pub methods: methods::MethodsUi,
+    pub line: line::LineUi,
 }
 
 impl PaneState {
@@ -132,6 +139,7 @@ impl PaneState {
             vision: Default::default(),
             yields: Default::default(),
             methods: Default::default(),
+            line: Default::default(),
         }
     }
 
@@ -155,6 +163,7 @@ impl PaneState {
             "vision" => self.vision.set(k, value),
             "yield" => self.yields.set(k, value),
             "methods" => self.methods.set(k, value),
+            "line" => self.line.set(k, value),
             _ => Err("an option is named pane.key".to_string()),
         };
         res.map_err(|e| {
@@ -183,6 +192,8 @@ pub const UI_OPTIONS: &[&str] = &[
     "vision.pin",
     "yield.selected",
     "methods.chart",
+    "line.cycle",
+    "line.log",
 ];
 
 pub(crate) fn parse_f64(v: &str) -> Result<f64, String> {
@@ -213,6 +224,7 @@ pub enum PaneView {
     Vision(vision::VisionView),
     Yield(yields::YieldView),
     Methods(methods::MethodsView),
+    Line(line::LineView),
 }
 
 impl PaneView {
@@ -226,6 +238,7 @@ impl PaneView {
             PaneView::Vision(_) => PaneId::Vision,
             PaneView::Yield(_) => PaneId::Yield,
             PaneView::Methods(_) => PaneId::Methods,
+            PaneView::Line(_) => PaneId::Line,
         }
     }
 
@@ -245,6 +258,7 @@ impl PaneView {
             PaneView::Vision(v) => v.to_csv(),
             PaneView::Yield(v) => v.to_csv(),
             PaneView::Methods(v) => v.to_csv(),
+            PaneView::Line(v) => v.to_csv(),
         }
     }
 
@@ -259,6 +273,7 @@ impl PaneView {
             PaneView::Vision(_) => Vec::new(),
             PaneView::Yield(v) => v.panels(),
             PaneView::Methods(v) => v.panels.clone(),
+            PaneView::Line(v) => v.chart.iter().map(|c| c.to_panel()).collect(),
         }
     }
 }
@@ -274,6 +289,7 @@ pub fn view(pane: PaneId, session: &Session, ui: &PaneState) -> PaneView {
         PaneId::Vision => PaneView::Vision(vision::view(session, ui)),
         PaneId::Yield => PaneView::Yield(yields::view(session, ui)),
         PaneId::Methods => PaneView::Methods(methods::view(session, ui)),
+        PaneId::Line => PaneView::Line(line::view(session, ui)),
     }
 }
 

@@ -19,10 +19,10 @@ pub use crate::engine::model::{
 };
 pub use crate::engine::overlay::{OverlayRun, run_overlay};
 pub use crate::engine::process::monitor_session;
-pub use crate::process::run::MonitorRun;
 pub use crate::engine::signals::{Channel, SignalSet};
 pub use crate::engine::vision::{Inspected, YieldRun, inspect_image, recipe_book, run_yield};
 use crate::model::params::Params;
+pub use crate::process::run::MonitorRun;
 use crate::progress::Progress;
 use crate::sim::sweep::SweepResult;
 use crate::sim::{Level, LevelChoice};
@@ -241,6 +241,14 @@ impl Session {
                     self.run_overlay_now(i);
                     return Some(format!("overlay of log {i}"));
                 }
+            }
+            PaneId::Line
+                if !self.logs.is_empty()
+                    && !self.process_recipes.is_empty()
+                    && self.monitor.is_none() =>
+            {
+                self.run_monitor_with(&Progress::hidden());
+                return Some(format!("monitor over {} log(s)", self.logs.len()));
             }
             _ => {}
         }

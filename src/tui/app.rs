@@ -109,6 +109,15 @@ impl App {
             {
                 self.start_yield();
             }
+            PaneId::Line
+                if !self.session.logs.is_empty()
+                    && !self.session.process_recipes.is_empty()
+                    && self.session.monitor.is_none()
+                    && !self.is_running(JobKind::Monitor)
+                    && !self.suppressed.contains(&JobKind::Monitor) =>
+            {
+                self.start_monitor();
+            }
             PaneId::Overlay if !self.session.logs.is_empty() => {
                 let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
                 if self.session.overlay_of(i).is_none()
@@ -130,6 +139,16 @@ impl App {
                 book: self.session.recipe_book(),
             });
         }
+    }
+
+    pub fn start_monitor(&mut self) {
+        let book = (!self.session.recipes.is_empty()).then(|| self.session.recipe_book());
+        self.start(JobRequest::Monitor {
+            recipes: self.session.process_recipes.clone(),
+            logs: self.session.logs.clone(),
+            images: self.session.images.clone(),
+            book,
+        });
     }
 
     pub fn start_yield(&mut self) {
@@ -239,7 +258,10 @@ impl App {
         }
         for r in &self.running {
             r.progress.cancel();
-            if matches!(r.kind, JobKind::Inspect | JobKind::Yield | JobKind::Overlay) {
+            if matches!(
+                r.kind,
+                JobKind::Inspect | JobKind::Yield | JobKind::Overlay | JobKind::Monitor
+            ) {
                 self.suppressed.push(r.kind);
             }
         }
@@ -340,6 +362,19 @@ impl App {
                     self.message = Some((format!("{}: {}", r.result.name, e.message), true));
                 }
                 self.session.set_inspection(*r);
+            }
+            JobOutput::Monitor(r) => {
+                self.message = Some(match &*r {
+                    Ok(run) => (
+                        format!(
+                            "monitor {}: {} OK, {} NOK, {} not evaluated",
+                            run.part_number, run.ok, run.nok, run.not_evaluated
+                        ),
+                        false,
+                    ),
+                    Err(e) => (format!("monitor: {e}"), true),
+                });
+                self.session.monitor = Some(*r);
             }
             JobOutput::Yield(r) => {
                 let rep = &r.report;
@@ -502,7 +537,7 @@ impl App {
                 let i = (self.pane.index() + n - 1) % n;
                 self.switch(PaneId::ALL[i]);
             }
-            KeyCode::Char(d @ '1'..='8') => {
+            KeyCode::Char(d @ '1'..='9') => {
                 let i = d as usize - '1' as usize;
                 self.switch(PaneId::ALL[i]);
             }
@@ -607,6 +642,13 @@ impl App {
                 let n = self.session.yields.as_ref().map_or(0, |y| y.results.len());
                 self.ui.yields.selected = step(self.ui.yields.selected, n);
             }
+            PaneId::Line => {
+                let n = crate::panes::line::view(&self.session, &self.ui)
+                    .cycles
+                    .len();
+                let cur = self.ui.line.cycle.unwrap_or(n.saturating_sub(1));
+                self.ui.line.cycle = Some(step(cur.min(n.saturating_sub(1)), n));
+            }
             PaneId::Methods => {
                 let n = crate::panes::methods::view(&self.session, &self.ui)
                     .chart_titles
@@ -677,6 +719,12 @@ impl App {
             PaneId::Yield if k.code == KeyCode::Char('r') && !self.session.images.is_empty() => {
                 self.start_yield();
             }
+            PaneId::Line => match k.code {
+                KeyCode::Char('r') if !self.session.process_recipes.is_empty() => {
+                    self.start_monitor()
+                }
+                _ => {}
+            },
             PaneId::Model => match k.code {
                 KeyCode::Enter | KeyCode::Char('e') => {
                     self.ui.model.editing =

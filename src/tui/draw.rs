@@ -58,7 +58,8 @@ impl Chrome {
 
 /// Tab labels fitting `width`, with their column ranges (for mouse clicks).
 pub fn tabs(width: u16) -> Vec<(PaneId, String, u16, u16)> {
-    let full: u16 = PaneId::ALL.iter().map(|p| p.title().len() as u16 + 3).sum();
+    // " 9 Methods ": the title, its number and three spaces.
+    let full: u16 = PaneId::ALL.iter().map(|p| p.title().len() as u16 + 4).sum();
     let short = full > width;
     let mut x = 0u16;
     let mut out = Vec::new();
@@ -87,6 +88,7 @@ fn hints(pane: PaneId) -> &'static str {
         PaneId::Vision => "n/p image  j/k pin",
         PaneId::Yield => "j/k select",
         PaneId::Methods => "j/k chart  r re-run",
+        PaneId::Line => "j/k cycle  r re-run",
     }
 }
 

@@ -8,8 +8,8 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ("everywhere", "Tab  Shift-Tab", "next / previous pane"),
     (
         "everywhere",
-        "1 … 8",
-        "Session Signals Overlay Model Study Vision Yield Methods",
+        "1 … 9",
+        "Session Signals Overlay Model Study Vision Yield Methods Line",
     ),
     (
         "everywhere",
@@ -62,4 +62,10 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ("Vision", "r", "inspect the images again"),
     ("Methods", "j k", "choose the chart"),
     ("Methods", "r", "run the quick methods lab again"),
+    (
+        "Line",
+        "j k  g G",
+        "choose the cycle shown against its objects",
+    ),
+    ("Line", "r", "run the process monitor again"),
 ];

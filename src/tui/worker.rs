@@ -31,6 +31,7 @@ pub enum JobKind {
     Inspect,
     Yield,
     Overlay,
+    Monitor,
 }
 
 /// A unit of background work.
@@ -59,6 +60,13 @@ pub enum JobRequest {
         images: Vec<ImageEntry>,
         book: RecipeBook,
     },
+    /// The process monitor over the session's logs (the Line pane).
+    Monitor {
+        recipes: Vec<crate::process::ProcessRecipe>,
+        logs: Vec<crate::engine::entries::LogEntry>,
+        images: Vec<ImageEntry>,
+        book: Option<RecipeBook>,
+    },
     /// Measured vs predicted for one log.
     Overlay {
         index: usize,
@@ -77,6 +85,7 @@ impl JobRequest {
             JobRequest::Inspect { .. } => JobKind::Inspect,
             JobRequest::Yield { .. } => JobKind::Yield,
             JobRequest::Overlay { .. } => JobKind::Overlay,
+            JobRequest::Monitor { .. } => JobKind::Monitor,
         }
     }
 
@@ -88,6 +97,7 @@ impl JobRequest {
             JobRequest::Inspect { image, .. } => format!("inspecting {}", image.name),
             JobRequest::Yield { images, .. } => format!("yield over {} images", images.len()),
             JobRequest::Overlay { log, .. } => format!("overlay of {}", log.file),
+            JobRequest::Monitor { logs, .. } => format!("monitor over {} log(s)", logs.len()),
             JobRequest::Load { paths } => match paths.as_slice() {
                 [one] => format!("opening {}", one.display()),
                 many => format!("opening {} paths", many.len()),
@@ -106,6 +116,7 @@ pub enum JobOutput {
     Inspected(Box<Inspected>),
     Yield(Box<YieldRun>),
     Overlay(Box<OverlayRun>),
+    Monitor(Box<Result<crate::process::run::MonitorRun, String>>),
     /// The job panicked (a defect): the message, for the status line.
     Failed(String),
 }
@@ -134,6 +145,18 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
         JobRequest::Overlay { index, log, cycles } => {
             JobOutput::Overlay(Box::new(run_overlay(index, &log, &cycles, progress)))
         }
+        JobRequest::Monitor {
+            recipes,
+            logs,
+            images,
+            book,
+        } => JobOutput::Monitor(Box::new(crate::engine::process::monitor_session(
+            &recipes,
+            &logs,
+            &images,
+            book.as_ref(),
+            progress,
+        ))),
         JobRequest::Load { paths } => {
             let mut out = Vec::new();
             for p in paths {

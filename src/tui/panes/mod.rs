@@ -33,6 +33,7 @@ pub fn draw_pane(f: &mut Frame, area: Rect, view: &PaneView, theme: &Theme, img:
         PaneView::Vision(v) => vision::vision(f, area, v, theme, img),
         PaneView::Yield(v) => yields::yields(f, area, v, theme),
         PaneView::Methods(v) => methods::methods(f, area, v, theme),
+        PaneView::Line(v) => line::line(f, area, v, theme),
     }
 }
 
@@ -55,6 +56,7 @@ pub(super) fn opt3(x: Option<f64>) -> String {
 
 // ---------------------------------------------------------------- Yield, Methods
 
+mod line;
 mod methods;
 mod model;
 mod overlay;
