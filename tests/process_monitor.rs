@@ -194,3 +194,112 @@ fn out_folder_and_mcap() {
     // The log's own signals are there too.
     assert!(v["topics"]["/rig/force"]["count"].as_u64().unwrap() > 10_000);
 }
+
+/// The Q-DAS export read back by an independent reader (PyPI
+/// `aqdefreader`): the part, every value check as a characteristic with its
+/// limits and unit, and every cycle's value and date, against the run's
+/// own JSON.
+#[test]
+fn the_dfq_export_reads_back_with_an_independent_aqdef_reader() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = learned(&dir);
+    let dfq = dir.path().join("run.dfq");
+    let (code, json, err) = pinsight(&[
+        "monitor",
+        LOG,
+        "--process",
+        r.to_str().unwrap(),
+        "--json",
+        "--dfq",
+        dfq.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let run: Value = serde_json::from_str(&json).unwrap();
+    let py = Command::new("python3")
+        .arg(root().join("tests/python/read_dfq.py"))
+        .arg(&dfq)
+        .output()
+        .expect("python3 with aqdefreader");
+    assert!(
+        py.status.success(),
+        "{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    let got: Value = serde_json::from_slice(&py.stdout).unwrap();
+    let parts = got["parts"].as_array().unwrap();
+    assert_eq!(parts.len(), 1);
+    assert_eq!(parts[0]["part"], "HDR-2x10-2.54");
+    let chars = parts[0]["characteristics"].as_array().unwrap();
+    let spc = run["spc"].as_array().unwrap();
+    assert_eq!(chars.len(), spc.len());
+    let cycles = run["logs"][0]["report"]["Ok"]["cycles"].as_array().unwrap();
+    for (c, s) in chars.iter().zip(spc) {
+        let f = &c["fields"];
+        assert_eq!(f["K2001"], s["quantity"]);
+        assert_eq!(f["K2002"], s["name"]);
+        let unit = s["unit"].as_str().unwrap();
+        if unit.is_ascii() {
+            assert_eq!(f["K2142"], unit);
+        } else {
+            // Latin-1 in the file (µ = 0xB5); the reader guesses the code
+            // page from the bytes (chardet) and may read 0xB5 as another
+            // letter, so the bytes are checked here.
+            let bytes = std::fs::read(&dfq).unwrap();
+            let latin1: Vec<u8> = unit.chars().map(|c| c as u32 as u8).collect();
+            assert!(
+                bytes
+                    .windows(latin1.len() + 2)
+                    .any(|w| w[1..w.len() - 1] == latin1[..]
+                        && w[0] == b' '
+                        && w[w.len() - 1] == b'\r'),
+                "unit {unit} not in Latin-1"
+            );
+            assert_eq!(
+                f["K2142"].as_str().unwrap().chars().count(),
+                unit.chars().count()
+            );
+        }
+        let lim = |k: &str, j: &str| {
+            let want = &s["capability"][j];
+            if want.is_null() {
+                assert!(f.get(k).is_none(), "{k}: {f}");
+            } else {
+                let v: f64 = f[k].as_str().unwrap().replace(',', ".").parse().unwrap();
+                assert_eq!(v, want.as_f64().unwrap(), "{k}");
+            }
+        };
+        lim("K2110", "lsl");
+        lim("K2111", "usl");
+        let name = s["name"].as_str().unwrap();
+        let want: Vec<f64> = cycles
+            .iter()
+            .filter_map(|cy| cy["values"][name].as_f64())
+            .collect();
+        let vals = c["values"].as_array().unwrap();
+        assert_eq!(vals.len(), want.len(), "{name}");
+        for (v, w) in vals.iter().zip(&want) {
+            assert!(
+                (v.as_f64().unwrap() - w).abs() <= 5e-7,
+                "{name}: {v} vs {w}"
+            );
+        }
+        // Dates: the cycle's start, to the second (UTC; the fixture's days
+        // are past the 12th, so the reader's month-first guess is moot).
+        let dates = c["dates"].as_array().unwrap();
+        let starts: Vec<i64> = cycles
+            .iter()
+            .filter(|cy| cy["values"][name].is_number())
+            .map(|cy| cy["t_start_ns"].as_i64().unwrap())
+            .collect();
+        for (d, t) in dates.iter().zip(starts) {
+            let secs = t.div_euclid(1_000_000_000);
+            let (days, sod) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+            let want_time = format!("T{:02}:{:02}:{:02}", sod / 3600, (sod / 60) % 60, sod % 60);
+            let d = d.as_str().unwrap();
+            assert!(d.ends_with(&want_time), "{d} vs {want_time}");
+            // The fixture runs on 2026-11-20 (UTC): day 20 777 after the epoch.
+            assert_eq!(days, 20_777);
+            assert!(d.starts_with("2026-11-20"), "{d}");
+        }
+    }
+}

@@ -66,6 +66,10 @@ fn every_pane_by_number_tab_and_mouse_and_help_lists_every_key() {
         app.session.methods.is_some(),
         "methods lab ran on first visit"
     );
+    assert!(
+        matches!(&app.session.monitor, Some(Ok(m)) if m.ok + m.nok == 20),
+        "the process monitor ran on the Line pane's first visit"
+    );
     // Both labs: the vision lab's localisers and, on every degradation
     // axis, the level where the verdicts break.
     let v = pinsight::panes::methods::view(&app.session, &app.ui);
@@ -79,7 +83,7 @@ fn every_pane_by_number_tab_and_mouse_and_help_lists_every_key() {
     app.update(key(KeyCode::Tab));
     assert_eq!(app.pane, PaneId::Session);
     app.update(key(KeyCode::BackTab));
-    assert_eq!(app.pane, PaneId::Methods);
+    assert_eq!(app.pane, PaneId::Line);
     // Click on the third tab.
     let tabs = pinsight::tui::draw::tabs(120);
     app.update(Msg::Mouse(MouseEvent {

@@ -1,5 +1,5 @@
 //! `pinsight monitor LOG... --process R.toml [--learn N] [--json | --csv |
-//! --out DIR] [--mcap FILE]`: every cycle's force curve judged against the
+//! --out DIR] [--dfq FILE] [--mcap FILE]`: every cycle's force curve judged against the
 //! process recipe's evaluation objects (OK / NOK with reasons / not
 //! evaluated), and the SPC of the value checks (see [`crate::process`]).
 //!
@@ -48,6 +48,9 @@ pub struct Args {
     /// Write monitor.json, cycles.csv and spc.csv into this folder.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Also write the process values as a Q-DAS ASCII transfer file (AQDEF .dfq) for SPC packages.
+    #[arg(long, value_name = "FILE.dfq")]
+    pub dfq: Option<PathBuf>,
     /// Also write the verdicts as MCAP for Foxglove (with the log's own messages).
     #[arg(long, value_name = "FILE")]
     pub mcap: Option<PathBuf>,
@@ -82,6 +85,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             rep.add("connectors.csv", connectors_csv(&run).as_bytes())?;
         }
         rep.commit()?;
+    }
+    if let Some(file) = &args.dfq {
+        crate::output::write_file(file, &crate::process::qdas::dfq(&run))?;
     }
     if let Some(file) = &args.mcap {
         let bytes = crate::export::mcap::monitor::monitor_mcap(&run, &args.logs)

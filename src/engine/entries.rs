@@ -35,7 +35,7 @@ impl FileKind {
             FileKind::RigLog => "rig log",
             FileKind::Image => "image",
             FileKind::Recipe => "recipe",
-            FileKind::ProcessRecipe => "process recipe",
+            FileKind::ProcessRecipe => "process",
             FileKind::Params => "parameters",
             FileKind::Folder => "folder",
             FileKind::Unknown => "unknown",

@@ -11,6 +11,7 @@
 //!   cycles, SPC per value check;
 //! - [`run`]: several logs' verdicts, totals and SPC (overall, by lot);
 //! - [`report`]: the run as text and CSV;
+//! - [`qdas`]: the run as a Q-DAS ASCII transfer file (AQDEF `.dfq`);
 //! - [`story`]: each connector's whole story (process verdict, vision
 //!   verdict, the model's band) and the confusion of the two verdicts;
 //! - [`synth`]: a faulty line for tests and demos (insertion faults in the
@@ -24,6 +25,7 @@
 pub mod curve;
 pub mod monitor;
 pub mod objects;
+pub mod qdas;
 pub mod recipe;
 pub mod report;
 pub mod run;

@@ -7,7 +7,6 @@
 use super::draw::{Chrome, Status, help_rows, tabs};
 use super::worker::{JobKind, JobOutput, JobRequest};
 use crate::panes::model::{self, Edit};
-use crate::panes::session::FileStatus;
 use crate::panes::{self, PaneId, PaneState, PaneView, Session};
 use crate::progress::Progress;
 use crossterm::event::{
@@ -50,11 +49,11 @@ pub struct App {
     pub running: Vec<Running>,
     /// Jobs queued for the runtime to start.
     pub requests: Vec<(u64, JobRequest, Arc<Progress>)>,
-    next_id: u64,
+    pub(super) next_id: u64,
     pub quit: bool,
     /// Background analyses the user cancelled: not restarted by themselves
     /// until asked (`r`) or the subject changes.
-    suppressed: Vec<JobKind>,
+    pub(super) suppressed: Vec<JobKind>,
 }
 
 impl App {
@@ -78,92 +77,6 @@ impl App {
             app.start_model();
         }
         app
-    }
-
-    fn is_running(&self, kind: JobKind) -> bool {
-        self.running.iter().any(|r| r.kind == kind)
-    }
-
-    /// Starts the analysis the current pane needs and does not have yet:
-    /// the inspection of the Vision pane's image, the batch yield, the
-    /// overlay of the log shown. Called after every update, so a pane
-    /// shows real results as soon as the worker has them; the first frame
-    /// never waits for them.
-    pub fn schedule(&mut self) {
-        match self.pane {
-            PaneId::Vision if !self.session.images.is_empty() => {
-                let n = self.session.images.len();
-                let i = self.ui.vision.image.min(n - 1);
-                if self.session.inspection(i).is_none()
-                    && !self.is_running(JobKind::Inspect)
-                    && !self.suppressed.contains(&JobKind::Inspect)
-                {
-                    self.start_inspect(i);
-                }
-            }
-            PaneId::Yield
-                if !self.session.images.is_empty()
-                    && self.session.yields.is_none()
-                    && !self.is_running(JobKind::Yield)
-                    && !self.suppressed.contains(&JobKind::Yield) =>
-            {
-                self.start_yield();
-            }
-            PaneId::Line
-                if !self.session.logs.is_empty()
-                    && !self.session.process_recipes.is_empty()
-                    && self.session.monitor.is_none()
-                    && !self.is_running(JobKind::Monitor)
-                    && !self.suppressed.contains(&JobKind::Monitor) =>
-            {
-                self.start_monitor();
-            }
-            PaneId::Overlay if !self.session.logs.is_empty() => {
-                let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
-                if self.session.overlay_of(i).is_none()
-                    && !self.is_running(JobKind::Overlay)
-                    && !self.suppressed.contains(&JobKind::Overlay)
-                {
-                    self.start_overlay(i);
-                }
-            }
-            _ => {}
-        }
-    }
-
-    pub fn start_inspect(&mut self, index: usize) {
-        if let Some(img) = self.session.images.get(index) {
-            self.start(JobRequest::Inspect {
-                index,
-                image: Box::new(img.clone()),
-                book: self.session.recipe_book(),
-            });
-        }
-    }
-
-    pub fn start_monitor(&mut self) {
-        let book = (!self.session.recipes.is_empty()).then(|| self.session.recipe_book());
-        self.start(JobRequest::Monitor {
-            recipes: self.session.process_recipes.clone(),
-            logs: self.session.logs.clone(),
-            images: self.session.images.clone(),
-            book,
-        });
-    }
-
-    pub fn start_yield(&mut self) {
-        self.start(JobRequest::Yield {
-            images: self.session.images.clone(),
-            book: self.session.recipe_book(),
-        });
-    }
-
-    pub fn start_overlay(&mut self, index: usize) {
-        match self.session.logs.get(index).map(|l| l.rig.clone()) {
-            Some(Some((log, cycles))) => self.start(JobRequest::Overlay { index, log, cycles }),
-            Some(None) => self.session.run_overlay_now(index), // records why not
-            None => {}
-        }
     }
 
     /// The current pane's view.
@@ -203,73 +116,6 @@ impl App {
         }
     }
 
-    /// Queues a job; a running job of the same kind (model, study) is
-    /// cancelled and its result will be ignored.
-    pub fn start(&mut self, req: JobRequest) {
-        let kind = req.kind();
-        self.suppressed.retain(|k| *k != kind);
-        if kind != JobKind::Load {
-            for r in self.running.iter().filter(|r| r.kind == kind) {
-                r.progress.cancel();
-            }
-            self.running.retain(|r| r.kind != kind);
-        }
-        let id = self.next_id;
-        self.next_id += 1;
-        let progress = Progress::new(0);
-        self.running.push(Running {
-            id,
-            kind,
-            label: req.label(),
-            progress: progress.clone(),
-        });
-        self.requests.push((id, req, progress));
-    }
-
-    pub fn start_model(&mut self) {
-        self.start(JobRequest::Model {
-            params: Box::new(self.session.params.clone()),
-            level: self.session.level,
-        });
-    }
-
-    pub fn start_study(&mut self) {
-        self.start(JobRequest::Study {
-            params: Box::new(self.session.params.clone()),
-            setup: self.session.study_setup.clone(),
-        });
-    }
-
-    pub fn open(&mut self, paths: Vec<PathBuf>) {
-        if !paths.is_empty() {
-            self.start(JobRequest::Load { paths });
-        }
-    }
-
-    /// Takes the queued jobs (the runtime starts them; tests run them in line).
-    pub fn take_requests(&mut self) -> Vec<(u64, JobRequest, Arc<Progress>)> {
-        std::mem::take(&mut self.requests)
-    }
-
-    /// Cancels every running job.
-    pub fn cancel_jobs(&mut self) {
-        if self.running.is_empty() {
-            return;
-        }
-        for r in &self.running {
-            r.progress.cancel();
-            if matches!(
-                r.kind,
-                JobKind::Inspect | JobKind::Yield | JobKind::Overlay | JobKind::Monitor
-            ) {
-                self.suppressed.push(r.kind);
-            }
-        }
-        let names: Vec<String> = self.running.iter().map(|r| r.label.clone()).collect();
-        self.running.clear();
-        self.message = Some((format!("cancelled: {}", names.join(", ")), false));
-    }
-
     /// Handles one message.
     pub fn update(&mut self, msg: Msg) {
         self.update_inner(msg);
@@ -290,121 +136,6 @@ impl App {
                 self.ui.height = h;
             }
             Msg::JobDone(id, out) => self.job_done(id, *out),
-        }
-    }
-
-    fn job_done(&mut self, id: u64, out: JobOutput) {
-        let Some(pos) = self.running.iter().position(|r| r.id == id) else {
-            return; // superseded or cancelled: ignore
-        };
-        let job = self.running.remove(pos);
-        match out {
-            JobOutput::Model(r) => {
-                let r = *r;
-                let failed = r.as_ref().err().cloned();
-                self.session.set_model_run(r);
-                self.message = failed.map(|e| (format!("model run failed: {e}"), true));
-            }
-            JobOutput::Study(r) => {
-                let cancelled = job.progress.is_cancelled();
-                let failed = r.failed;
-                let n = r.cases.len();
-                self.session.set_study(*r);
-                self.message = Some(if cancelled {
-                    (
-                        format!("study cancelled ({failed} of {n} cases did not run)"),
-                        true,
-                    )
-                } else if failed > 0 {
-                    (format!("study done: {failed} of {n} cases failed"), true)
-                } else {
-                    (format!("study done: {n} cases"), false)
-                });
-            }
-            JobOutput::Loaded(items) => {
-                let n = items.len();
-                let errors: Vec<String> = items
-                    .iter()
-                    .filter_map(|i| match &i.entry().status {
-                        FileStatus::Error(m) => Some(format!("{}: {m}", i.entry().path)),
-                        _ => None,
-                    })
-                    .collect();
-                let first_new = self.session.files.len();
-                let params_changed = self.session.absorb(items);
-                self.ui.session.selected = first_new;
-                self.message = Some(match errors.as_slice() {
-                    [] => (format!("opened {n} file(s)"), false),
-                    [one] => (one.clone(), true),
-                    many => (
-                        format!(
-                            "{} of {n} file(s) could not be used (see Session)",
-                            many.len()
-                        ),
-                        true,
-                    ),
-                });
-                if params_changed {
-                    self.start_model();
-                }
-            }
-            JobOutput::Methods(lab) => {
-                if job.progress.is_cancelled() {
-                    self.message = Some(("methods lab cancelled".into(), true));
-                } else {
-                    self.session.methods = Some(*lab);
-                    self.session.methods_error = None;
-                    self.message = Some(("methods lab done".into(), false));
-                }
-            }
-            JobOutput::Inspected(r) => {
-                if let Some(e) = &r.result.error {
-                    self.message = Some((format!("{}: {}", r.result.name, e.message), true));
-                }
-                self.session.set_inspection(*r);
-            }
-            JobOutput::Monitor(r) => {
-                self.message = Some(match &*r {
-                    Ok(run) => (
-                        format!(
-                            "monitor {}: {} OK, {} NOK, {} not evaluated",
-                            run.part_number, run.ok, run.nok, run.not_evaluated
-                        ),
-                        false,
-                    ),
-                    Err(e) => (format!("monitor: {e}"), true),
-                });
-                self.session.monitor = Some(*r);
-            }
-            JobOutput::Yield(r) => {
-                let rep = &r.report;
-                self.message = Some((
-                    format!(
-                        "yield {}: {} of {} connectors pass, {} error(s), {:.1} s",
-                        rep.yield_frac
-                            .map(|y| format!("{:.1} %", 100.0 * y))
-                            .unwrap_or_else(|| "–".into()),
-                        rep.passed,
-                        rep.inspected,
-                        rep.errors,
-                        r.wall_ms / 1e3
-                    ),
-                    false,
-                ));
-                self.session.set_yield(*r);
-            }
-            JobOutput::Overlay(r) => {
-                if let Err(e) = &r.report {
-                    self.message = Some((format!("overlay: {e}"), true));
-                }
-                self.session.set_overlay(*r);
-            }
-            JobOutput::Failed(e) => {
-                if job.kind == JobKind::Methods {
-                    self.session.methods_error = Some(e.clone());
-                }
-                self.message = Some((e, true))
-            }
         }
     }
 

@@ -58,8 +58,9 @@ impl Chrome {
 
 /// Tab labels fitting `width`, with their column ranges (for mouse clicks).
 pub fn tabs(width: u16) -> Vec<(PaneId, String, u16, u16)> {
-    // " 9 Methods ": the title, its number and three spaces.
-    let full: u16 = PaneId::ALL.iter().map(|p| p.title().len() as u16 + 4).sum();
+    // "9 Methods ": the title, its number and two spaces (nine panes fit
+    // 80 columns in full).
+    let full: u16 = PaneId::ALL.iter().map(|p| p.title().len() as u16 + 3).sum();
     let short = full > width;
     let mut x = 0u16;
     let mut out = Vec::new();
@@ -69,7 +70,7 @@ pub fn tabs(width: u16) -> Vec<(PaneId, String, u16, u16)> {
         } else {
             p.title().to_string()
         };
-        let label = format!(" {} {} ", i + 1, name);
+        let label = format!("{} {} ", i + 1, name);
         let w = label.chars().count() as u16;
         out.push((*p, label, x, x + w));
         x += w;

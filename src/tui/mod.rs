@@ -15,6 +15,7 @@
 pub mod app;
 pub mod draw;
 pub mod image_cache;
+pub mod jobs;
 pub mod keys;
 pub mod panes;
 pub mod theme;
