@@ -48,6 +48,26 @@ pub fn toml_value(v: &toml::Value) -> String {
     }
 }
 
+/// A UTC calendar time of ns since the Unix epoch: (year, month, day,
+/// hour, minute, second, millisecond). Howard Hinnant's days-to-civil
+/// algorithm; one definition for every date pinsight writes.
+pub fn utc_civil(t_ns: i64) -> (i64, i64, i64, i64, i64, i64, i64) {
+    let secs = t_ns.div_euclid(1_000_000_000);
+    let ms = t_ns.rem_euclid(1_000_000_000) / 1_000_000;
+    let days = secs.div_euclid(86_400);
+    let sod = secs.rem_euclid(86_400);
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    (y, m, d, sod / 3600, (sod / 60) % 60, sod % 60, ms)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

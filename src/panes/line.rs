@@ -340,12 +340,6 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
         v.disagreements = st
             .disagreements()
             .map(|c| {
-                let why: Vec<&str> = c
-                    .process_reasons
-                    .iter()
-                    .chain(&c.vision_reasons)
-                    .map(String::as_str)
-                    .collect();
                 format!(
                     "cycle {}: process {}, vision {}: {}",
                     c.cycle,
@@ -355,7 +349,7 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
                         Some(crate::vision::batch::ItemStatus::Pass) => "pass",
                         _ => "–",
                     },
-                    why.join("; ")
+                    c.why()
                 )
             })
             .collect();

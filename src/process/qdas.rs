@@ -33,25 +33,8 @@ pub const DECIMALS: usize = 6;
 
 /// `DD.MM.YYYY/HH:MM:SS` (UTC) of a time in ns since the Unix epoch.
 pub fn qdas_time(t_ns: i64) -> String {
-    let secs = t_ns.div_euclid(1_000_000_000);
-    let days = secs.div_euclid(86_400);
-    let sod = secs.rem_euclid(86_400);
-    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{d:02}.{m:02}.{y:04}/{:02}:{:02}:{:02}",
-        sod / 3600,
-        (sod / 60) % 60,
-        sod % 60
-    )
+    let (y, m, d, hh, mm, ss, _) = crate::fmt::utc_civil(t_ns);
+    format!("{d:02}.{m:02}.{y:04}/{hh:02}:{mm:02}:{ss:02}")
 }
 
 /// A field's text on one line (AQDEF fields end at the line end).

@@ -196,13 +196,7 @@ fn story_text(out: &mut String, st: &StoryReport) {
             Some(ItemStatus::Fail) => "vision fail",
             _ => "vision pass",
         };
-        let why: Vec<&str> = c
-            .process_reasons
-            .iter()
-            .chain(&c.vision_reasons)
-            .map(String::as_str)
-            .collect();
-        let _ = writeln!(out, "  cycle {:>6} {p}, {v}: {}", c.cycle, why.join("; "));
+        let _ = writeln!(out, "  cycle {:>6} {p}, {v}: {}", c.cycle, c.why());
     }
     if dis.len() > MAX_LISTED {
         let _ = writeln!(

@@ -76,6 +76,19 @@ pub struct ConnectorStory {
     pub agree: Option<bool>,
 }
 
+impl ConnectorStory {
+    /// Both sides' reasons, process first, joined for one line.
+    pub fn why(&self) -> String {
+        let all: Vec<&str> = self
+            .process_reasons
+            .iter()
+            .chain(&self.vision_reasons)
+            .map(String::as_str)
+            .collect();
+        all.join("; ")
+    }
+}
+
 /// The stories of one log's connectors.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StoryReport {

@@ -135,27 +135,8 @@ pub fn summarize(log: &RigLog, cycles: Option<&CycleSet>) -> LogSummary {
 
 /// UTC calendar date and time of ns since the Unix epoch, `YYYY-MM-DD hh:mm:ss.mmm`.
 pub fn utc_string(t_ns: i64) -> String {
-    let secs = t_ns.div_euclid(1_000_000_000);
-    let ms = t_ns.rem_euclid(1_000_000_000) / 1_000_000;
-    let days = secs.div_euclid(86_400);
-    let sod = secs.rem_euclid(86_400);
-    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let y = yoe + era * 400;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = if m <= 2 { y + 1 } else { y };
-    format!(
-        "{y:04}-{m:02}-{d:02} {:02}:{:02}:{:02}.{ms:03}",
-        sod / 3600,
-        (sod % 3600) / 60,
-        sod % 60
-    )
+    let (y, m, d, hh, mm, ss, ms) = crate::fmt::utc_civil(t_ns);
+    format!("{y:04}-{m:02}-{d:02} {hh:02}:{mm:02}:{ss:02}.{ms:03}")
 }
 
 #[cfg(test)]
