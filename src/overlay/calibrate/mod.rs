@@ -26,6 +26,7 @@
 //! tare and the angle offset come from the cycle analysis and are reported
 //! as they are.
 
+pub mod coverage;
 mod force_fit;
 mod stroke_fit;
 
@@ -53,6 +54,15 @@ pub struct CalibrateOptions {
     pub blocks: usize,
     /// Fit the F_ins table (else only standoff and lag with the nominal table).
     pub fit_f_ins: bool,
+    /// The fine grid around the coarse estimate c0: c0 × these factors …
+    pub refine_factors: Vec<f64>,
+    /// … each simulated for this many revolutions per measured cycle, within (min, max).
+    pub refine_cycles_factor: usize,
+    pub refine_revs: (usize, usize),
+    /// Simulated logs of the measured length at the fitted clearance for the
+    /// clearance's σ, and the most revolutions they may take in all.
+    pub boot_windows: usize,
+    pub boot_max_revs: usize,
 }
 
 impl Default for CalibrateOptions {
@@ -65,6 +75,11 @@ impl Default for CalibrateOptions {
             clearance_grid_mm: vec![0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0],
             blocks: 8,
             fit_f_ins: true,
+            refine_factors: vec![0.8, 0.9, 1.0, 1.1, 1.25],
+            refine_cycles_factor: 6,
+            refine_revs: (192, 960),
+            boot_windows: 16,
+            boot_max_revs: 1600,
         }
     }
 }
@@ -145,6 +160,7 @@ pub fn calibrate(
         .map_or(0.0, |s| noise_sigma(&s.values));
 
     // 1. Predictions on the clearance grid (in parallel).
+    let k_meas = cycles.len();
     let nominal_c = base.clearance * 1e3;
     let mut grid_c: Vec<f64> = opts.clearance_grid_mm.clone();
     grid_c.push(nominal_c);
@@ -155,21 +171,27 @@ pub fn calibrate(
         points_per_rev: n,
         ..opts.predict.clone()
     };
-    progress.set_total(grid_c.len() as u64 + 2);
-    let preds: Vec<Result<Prediction, _>> = grid_c
-        .par_iter()
-        .map(|&c| {
-            let mut p = base.clone();
-            p.clearance = c * 1e-3;
-            let r = predict(&p, motor_rpm, &popts, &Progress::hidden());
-            progress.inc(1);
-            r
-        })
-        .collect();
+    let refine_revs = (opts.refine_cycles_factor * k_meas).clamp(opts.refine_revs.0, opts.refine_revs.1);
+    progress.set_total(grid_c.len() as u64 + opts.refine_factors.len() as u64 + 3);
+    let run_grid = |cs: &[f64], revs: usize| -> Vec<(f64, Result<Prediction, crate::sim::SimError>)> {
+        cs.par_iter()
+            .map(|&c| {
+                let mut p = base.clone();
+                p.clearance = c * 1e-3;
+                let o = PredictOptions {
+                    revs,
+                    ..popts.clone()
+                };
+                let r = predict(&p, motor_rpm, &o, &Progress::hidden());
+                progress.inc(1);
+                (c, r)
+            })
+            .collect()
+    };
     let mut preds_ok = Vec::new();
-    for (c, r) in grid_c.iter().zip(preds) {
+    for (c, r) in run_grid(&grid_c, popts.revs) {
         match r {
-            Ok(p) => preds_ok.push((*c, p)),
+            Ok(p) => preds_ok.push((c, p)),
             Err(e) => notes.push(format!(
                 "the model failed at clearance {c} mm ({e}); left out of the grid"
             )),
@@ -182,8 +204,10 @@ pub fn calibrate(
         });
     }
     let nb = opts.blocks.max(2);
-    let pred_curves = |drop: Option<usize>| -> Vec<(f64, Curves)> {
-        preds_ok
+    // The measured spread is the σ of k_meas cycles in a row: the prediction's
+    // spread is the same statistic over windows of k_meas revolutions.
+    let curves_pred = |preds: &[(f64, Prediction)], drop: Option<usize>| -> Vec<(f64, Curves)> {
+        preds
             .iter()
             .map(|(c, p)| {
                 let r = p.stroke_revs.len();
@@ -194,7 +218,7 @@ pub fn calibrate(
                     .filter(|(i, _)| drop.is_none_or(|b| i * nb / r != b))
                     .map(|(_, v)| v.as_slice())
                     .collect();
-                (*c, curves_of(&rows, n))
+                (*c, curves_windowed(&rows, n, k_meas))
             })
             .collect()
     };
@@ -208,8 +232,36 @@ pub fn calibrate(
             .collect();
         curves_of(&rows, n)
     };
-    let full_pred = pred_curves(None);
     let full_meas = meas_curves(None);
+    // Coarse grid → c0; then long ensembles on a fine grid around c0 (the
+    // coarse ensembles are short: their sampling noise moves the minimum by
+    // several per cent from one realisation to the next).
+    let (c0, _, _) = fit_clearance(&full_meas, &curves_pred(&preds_ok, None), noise);
+    let fine_c: Vec<f64> = opts
+        .refine_factors
+        .iter()
+        .map(|f| c0 * f)
+        .filter(|c| *c > 1e-3)
+        .collect();
+    if fine_c.len() >= 3 {
+        let (lo, hi) = (fine_c[0], fine_c[fine_c.len() - 1]);
+        let mut fine = Vec::new();
+        for (c, r) in run_grid(&fine_c, refine_revs) {
+            match r {
+                Ok(p) => fine.push((c, p)),
+                Err(e) => notes.push(format!(
+                    "the model failed at clearance {c:.4} mm ({e}); left out of the fine grid"
+                )),
+            }
+        }
+        if fine.len() >= 3 {
+            preds_ok.retain(|(c, _)| *c < lo * 0.999 || *c > hi * 1.001);
+            preds_ok.extend(fine);
+            preds_ok.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+    }
+    let grid_c: Vec<f64> = preds_ok.iter().map(|x| x.0).collect();
+    let full_pred = curves_pred(&preds_ok, None);
     let (c_fit, dz, psi) = fit_clearance(&full_meas, &full_pred, noise);
     let profile: Vec<(f64, f64)> = full_pred
         .iter()
@@ -222,17 +274,46 @@ pub fn calibrate(
         .collect();
     let jk_pred: Vec<(f64, f64, f64)> = (0..nb)
         .into_par_iter()
-        .map(|b| fit_clearance(&full_meas, &pred_curves(Some(b)), noise))
+        .map(|b| fit_clearance(&full_meas, &curves_pred(&preds_ok, Some(b)), noise))
         .collect();
+    // The measured ensemble's own sampling spread, from the model: windows of
+    // k_meas consecutive revolutions simulated at the fitted clearance (with
+    // the measured noise added), each fitted like the log. The cycles of the
+    // chaotic motion are correlated over several revolutions, so the
+    // delete-a-block jackknife over the log's few blocks underestimates it.
+    let boot = bootstrap(&BootInput {
+        base,
+        motor_rpm,
+        popts: &popts,
+        c: c_fit,
+        k: k_meas,
+        windows: opts.boot_windows,
+        max_revs: opts.boot_max_revs,
+        noise,
+        grid: &full_pred,
+    });
+    progress.inc(1);
     let combine = |f: fn(&(f64, f64, f64)) -> f64| {
         let a = jackknife(&jk_meas.iter().map(f).collect::<Vec<_>>());
+        let a_boot = sample_sd(&boot.iter().map(f).collect::<Vec<_>>());
+        let a = if a_boot.is_finite() { a.max(a_boot) } else { a };
         let b = jackknife(&jk_pred.iter().map(f).collect::<Vec<_>>());
         (a * a + b * b).sqrt()
     };
     let sc = combine(|x| x.0);
     let sdz = combine(|x| x.1);
     let spsi = combine(|x| x.2);
-    progress.inc(1);
+    if boot.len() >= 2 {
+        let m = boot.iter().map(|x| x.0).sum::<f64>() / boot.len() as f64;
+        notes.push(format!(
+            "clearance σ {:.4} mm: {} simulated logs of {k_meas} cycles at {c_fit:.4} mm gave {m:.4} ± {:.4} mm; jackknife over the log's blocks {:.4} mm, over the prediction's {:.4} mm",
+            sc,
+            boot.len(),
+            sample_sd(&boot.iter().map(|x| x.0).collect::<Vec<_>>()),
+            jackknife(&jk_meas.iter().map(|x| x.0).collect::<Vec<_>>()),
+            jackknife(&jk_pred.iter().map(|x| x.0).collect::<Vec<_>>()),
+        ));
+    }
     let edge = grid_c.first().is_some_and(|&lo| c_fit <= lo * 1.001)
         || grid_c.last().is_some_and(|&hi| c_fit >= hi * 0.999);
     if edge {

@@ -1,6 +1,10 @@
 //! Fitting the clearance from the stroke: curves over the cycle, their
 //! interpolation across the simulated clearance grid, a golden-section search.
 
+use crate::model::Params;
+use crate::overlay::predict::{PredictOptions, predict};
+use crate::progress::Progress;
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 /// Stroke curves of one prediction: mean, spread and the mean's derivative in φ.
@@ -45,6 +49,52 @@ pub(super) fn curves_of(rows: &[&[f64]], n: usize) -> Curves {
         var_mean,
         var_spread,
     }
+}
+
+/// Curves of a long simulated ensemble as the measured statistic would see
+/// them: the mean over all revolutions, but the spread as the mean, over
+/// windows of `w` consecutive revolutions (overlapping by half), of each
+/// window's sample standard deviation. The measured spread is the standard
+/// deviation of k cycles in a row: for small k it is biased low (the
+/// sample-σ factor c4(k), and more so because consecutive revolutions of the
+/// chaotic motion are correlated). Compared with the spread of a long
+/// ensemble, the fit would then read a smaller clearance; compared with the
+/// same statistic at the same k, the bias is the same on both sides.
+/// `w` ≥ the number of revolutions (or < 2): the plain [`curves_of`].
+pub(super) fn curves_windowed(rows: &[&[f64]], n: usize, w: usize) -> Curves {
+    let r = rows.len();
+    let mut c = curves_of(rows, n);
+    if w < 2 || w >= r {
+        return c;
+    }
+    let step = (w / 2).max(1);
+    let starts: Vec<usize> = (0..=r - w).step_by(step).collect();
+    // Independent windows in the ensemble (for the spread's own sampling variance).
+    let indep = (r as f64 / w as f64).max(1.0);
+    for j in 0..n {
+        let mut sds = Vec::with_capacity(starts.len());
+        for &a in &starts {
+            let v: Vec<f64> = rows[a..a + w]
+                .iter()
+                .map(|row| row[j])
+                .filter(|x| x.is_finite())
+                .collect();
+            if v.len() < 2 {
+                continue;
+            }
+            let k = v.len() as f64;
+            let m = v.iter().sum::<f64>() / k;
+            sds.push((v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1.0)).sqrt());
+        }
+        if sds.len() < 2 {
+            continue;
+        }
+        let k = sds.len() as f64;
+        let m = sds.iter().sum::<f64>() / k;
+        c.spread[j] = m;
+        c.var_spread[j] = sds.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1.0) / indep;
+    }
+    c
 }
 
 /// Linear interpolation of two curves' values.
@@ -132,4 +182,79 @@ pub(super) fn fit_clearance(m: &Curves, grid: &[(f64, Curves)], noise: f64) -> (
     let c = golden(lo, hi, 40, obj);
     let (_, dz, psi, _, _) = stroke_objective(m, &interp_curves(grid, c), noise);
     (c, dz, psi)
+}
+
+/// Sample standard deviation (n − 1); NaN below 2 values.
+pub(super) fn sample_sd(v: &[f64]) -> f64 {
+    let v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.len() < 2 {
+        return f64::NAN;
+    }
+    let k = v.len() as f64;
+    let m = v.iter().sum::<f64>() / k;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1.0)).sqrt()
+}
+
+/// What [`bootstrap`] simulates and fits against.
+pub(super) struct BootInput<'a> {
+    pub(super) base: &'a Params,
+    pub(super) motor_rpm: f64,
+    pub(super) popts: &'a PredictOptions,
+    /// Clearance simulated (mm).
+    pub(super) c: f64,
+    /// Cycles per simulated log (the measured log's).
+    pub(super) k: usize,
+    pub(super) windows: usize,
+    pub(super) max_revs: usize,
+    /// Laser noise σ added to every sample (mm).
+    pub(super) noise: f64,
+    pub(super) grid: &'a [(f64, Curves)],
+}
+
+/// Parametric bootstrap of the stroke fit: `windows` logs of `k` consecutive
+/// revolutions of the model at clearance `c` (fewer when that would exceed
+/// `max_revs`, at least 6), simulated as 4 independent runs (clearances
+/// c·(1 + i·10⁻⁶): the chaotic motion forgets the difference within a few
+/// revolutions), noise added, each fitted like a measured log. Returns the
+/// fits (c, Δz, ψ); empty when the model fails.
+pub(super) fn bootstrap(b: &BootInput) -> Vec<(f64, f64, f64)> {
+    let k = b.k.max(2);
+    let windows = b.windows.min(b.max_revs / k).max(6);
+    let runs = 4usize.min(windows);
+    let per_run = windows.div_ceil(runs);
+    let sims: Vec<Vec<Vec<f64>>> = (0..runs)
+        .into_par_iter()
+        .filter_map(|i| {
+            let mut p = b.base.clone();
+            p.clearance = b.c * 1e-3 * (1.0 + 1e-6 * (i as f64 + 1.0));
+            let o = PredictOptions {
+                revs: per_run * k,
+                warmup: b.popts.warmup + 2.0,
+                ..b.popts.clone()
+            };
+            predict(&p, b.motor_rpm, &o, &Progress::hidden())
+                .ok()
+                .map(|r| r.stroke_revs)
+        })
+        .collect();
+    let mut wins: Vec<&[Vec<f64>]> = Vec::new();
+    for revs in &sims {
+        for w in revs.chunks_exact(k) {
+            wins.push(w);
+        }
+    }
+    wins.truncate(windows);
+    let n = b.grid.first().map_or(0, |g| g.1.mean.len());
+    wins.par_iter()
+        .enumerate()
+        .map(|(i, w)| {
+            let mut rng = crate::rng::SplitMix64::<0xB007_57A9_0000_0001>::new(i as u64 + 1);
+            let noisy: Vec<Vec<f64>> = w
+                .iter()
+                .map(|row| row.iter().map(|x| x + b.noise * rng.normal()).collect())
+                .collect();
+            let rows: Vec<&[f64]> = noisy.iter().map(|v| v.as_slice()).collect();
+            fit_clearance(&curves_of(&rows, n), b.grid, b.noise)
+        })
+        .collect()
 }
