@@ -10,9 +10,7 @@
 //! ```
 
 use pinsight::overlay::calibrate::CalibrateOptions;
-use pinsight::overlay::calibrate::coverage::{
-    CaseResult, CoverageCase, coverage_row, run_case,
-};
+use pinsight::overlay::calibrate::coverage::{CaseResult, CoverageCase, coverage_row, run_case};
 use rayon::prelude::*;
 use std::io::Write as _;
 

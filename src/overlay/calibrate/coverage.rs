@@ -193,6 +193,8 @@ pub struct CaseResult {
     /// Seconds: making the log, calibrating it.
     pub generate_s: f64,
     pub calibrate_s: f64,
+    /// The calibration's notes (how σ was made up).
+    pub notes: Vec<String>,
 }
 
 impl CaseResult {
@@ -249,9 +251,13 @@ pub fn run_case(case: &CoverageCase, opts: &CalibrateOptions) -> Result<CaseResu
         clearance_mm: e.value,
         sigma_mm: e.sigma,
         u95_mm: e.u95,
-        at_edge: r.notes.iter().any(|n| n.contains("edge of the simulated grid")),
+        at_edge: r
+            .notes
+            .iter()
+            .any(|n| n.contains("edge of the simulated grid")),
         generate_s,
         calibrate_s: t1.elapsed().as_secs_f64(),
+        notes: r.notes.clone(),
     })
 }
 
@@ -313,64 +319,4 @@ pub fn coverage_row(rs: &[&CaseResult]) -> CoverageRow {
         mean_z: z.iter().sum::<f64>() / k,
         rms_z: (z.iter().map(|x| x * x).sum::<f64>() / k).sqrt(),
     }
-}
-
-/// TEMPORARY diagnostics.
-pub fn diagnose(
-    log: &crate::rig::RigLog,
-    cs: &crate::rig::CycleSet,
-    base: &Params,
-    revs: usize,
-    warmup: f64,
-    lag_s: f64,
-) {
-    use super::stroke_fit::*;
-    use crate::overlay::predict::{PredictOptions, noise_sigma, predict};
-    use rayon::prelude::*;
-    let n = cs.points_per_rev;
-    let cycles: Vec<&crate::rig::Cycle> = cs.usable().filter(|c| !c.stroke_mm.is_empty()).collect();
-    let motor_rpm = cycles.iter().map(|c| c.crank_rpm).sum::<f64>() / cycles.len() as f64;
-    let noise = noise_sigma(&log.signals.displacement.as_ref().unwrap().values);
-    let grid: Vec<f64> = vec![0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0];
-    let popts = PredictOptions { points_per_rev: n, revs, warmup, laser_lag_s: lag_s, ..PredictOptions::default() };
-    let preds: Vec<(f64, Curves)> = grid.par_iter().map(|&c| {
-        let mut p = base.clone();
-        p.clearance = c * 1e-3;
-        let r = predict(&p, motor_rpm, &popts, &Progress::hidden()).unwrap();
-        let rows: Vec<&[f64]> = r.stroke_revs.iter().map(|v| v.as_slice()).collect();
-        (c, curves_of(&rows, n))
-    }).collect();
-    let rows: Vec<&[f64]> = cycles.iter().map(|c| c.stroke_mm.as_slice()).collect();
-    let m = curves_of(&rows, n);
-    let full = fit_clearance(&m, &preds, noise);
-    let mut ms = curves_of(&rows, n);
-    ms.var_mean.iter_mut().for_each(|v| *v = 1e30);
-    let spread_only = fit_clearance(&ms, &preds, noise);
-    let mut mm = curves_of(&rows, n);
-    mm.var_spread.iter_mut().for_each(|v| *v = 1e30);
-    let mean_only = fit_clearance(&mm, &preds, noise);
-    let mspread: f64 = m.spread.iter().filter(|x| x.is_finite()).sum::<f64>() / n as f64;
-    let prof: Vec<String> = preds.iter().map(|(c, p)| {
-        let ps: f64 = p.spread.iter().filter(|x| x.is_finite()).sum::<f64>() / n as f64;
-        format!("{c}:{ps:.4}")
-    }).collect();
-    eprintln!("revs {revs} warmup {warmup} lag {lag_s:e}: noise {noise:.4} full {:.4} spread-only {:.4} mean-only {:.4} | meas mean spread {mspread:.4} | pred {}", full.0, spread_only.0, mean_only.0, prof.join(" "));
-}
-
-/// TEMPORARY: transient.
-pub fn transient(base: &Params, rpm: f64, c: f64, revs: usize) {
-    use crate::overlay::predict::{PredictOptions, predict};
-    let mut p = base.clone();
-    p.clearance = c * 1e-3;
-    let popts = PredictOptions { points_per_rev: 720, revs, warmup: 0.0, ..PredictOptions::default() };
-    let r = predict(&p, rpm, &popts, &Progress::hidden()).unwrap();
-    let k = r.stroke_revs.len();
-    let late: Vec<&[f64]> = r.stroke_revs[k / 3..].iter().map(|v| v.as_slice()).collect();
-    let m = super::stroke_fit::curves_of(&late, 720);
-    let dev: Vec<f64> = r.stroke_revs.iter().map(|v| {
-        (v.iter().zip(&m.mean).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / 720.0).sqrt()
-    }).collect();
-    let w = 10;
-    let s: Vec<String> = dev.chunks(w).map(|c| format!("{:.3}", c.iter().sum::<f64>() / c.len() as f64)).collect();
-    eprintln!("c {c} rpm {rpm}: per-{w}-rev mean RMS deviation from the late mean: {}", s.join(" "));
 }

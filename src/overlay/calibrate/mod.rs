@@ -59,10 +59,6 @@ pub struct CalibrateOptions {
     /// … each simulated for this many revolutions per measured cycle, within (min, max).
     pub refine_cycles_factor: usize,
     pub refine_revs: (usize, usize),
-    /// Simulated logs of the measured length at the fitted clearance for the
-    /// clearance's σ, and the most revolutions they may take in all.
-    pub boot_windows: usize,
-    pub boot_max_revs: usize,
 }
 
 impl Default for CalibrateOptions {
@@ -75,11 +71,9 @@ impl Default for CalibrateOptions {
             clearance_grid_mm: vec![0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0],
             blocks: 8,
             fit_f_ins: true,
-            refine_factors: vec![0.8, 0.9, 1.0, 1.1, 1.25],
-            refine_cycles_factor: 6,
-            refine_revs: (192, 960),
-            boot_windows: 16,
-            boot_max_revs: 1600,
+            refine_factors: vec![0.76, 0.87, 1.0, 1.15, 1.32],
+            refine_cycles_factor: 5,
+            refine_revs: (120, 800),
         }
     }
 }
@@ -157,7 +151,11 @@ pub fn calibrate(
         .signals
         .displacement
         .as_ref()
-        .map_or(0.0, |s| noise_sigma(&s.values));
+        .map_or(0.0, |s| noise_sigma(&s.values))
+        // The cycles are the samples interpolated linearly onto the grid: at
+        // a point a fraction w between two samples the noise variance is
+        // ((1 − w)² + w²)·σ², 2/3·σ² on average over w.
+        * (2.0f64 / 3.0).sqrt();
 
     // 1. Predictions on the clearance grid (in parallel).
     let k_meas = cycles.len();
@@ -171,23 +169,25 @@ pub fn calibrate(
         points_per_rev: n,
         ..opts.predict.clone()
     };
-    let refine_revs = (opts.refine_cycles_factor * k_meas).clamp(opts.refine_revs.0, opts.refine_revs.1);
-    progress.set_total(grid_c.len() as u64 + opts.refine_factors.len() as u64 + 3);
-    let run_grid = |cs: &[f64], revs: usize| -> Vec<(f64, Result<Prediction, crate::sim::SimError>)> {
-        cs.par_iter()
-            .map(|&c| {
-                let mut p = base.clone();
-                p.clearance = c * 1e-3;
-                let o = PredictOptions {
-                    revs,
-                    ..popts.clone()
-                };
-                let r = predict(&p, motor_rpm, &o, &Progress::hidden());
-                progress.inc(1);
-                (c, r)
-            })
-            .collect()
-    };
+    let refine_revs =
+        (opts.refine_cycles_factor * k_meas).clamp(opts.refine_revs.0, opts.refine_revs.1);
+    progress.set_total(grid_c.len() as u64 + 2 * opts.refine_factors.len() as u64 + 3);
+    let run_grid =
+        |cs: &[f64], revs: usize| -> Vec<(f64, Result<Prediction, crate::sim::SimError>)> {
+            cs.par_iter()
+                .map(|&c| {
+                    let mut p = base.clone();
+                    p.clearance = c * 1e-3;
+                    let o = PredictOptions {
+                        revs,
+                        ..popts.clone()
+                    };
+                    let r = predict(&p, motor_rpm, &o, &Progress::hidden());
+                    progress.inc(1);
+                    (c, r)
+                })
+                .collect()
+        };
     let mut preds_ok = Vec::new();
     for (c, r) in run_grid(&grid_c, popts.revs) {
         match r {
@@ -236,33 +236,52 @@ pub fn calibrate(
     // Coarse grid → c0; then long ensembles on a fine grid around c0 (the
     // coarse ensembles are short: their sampling noise moves the minimum by
     // several per cent from one realisation to the next).
-    let (c0, _, _) = fit_clearance(&full_meas, &curves_pred(&preds_ok, None), noise);
-    let fine_c: Vec<f64> = opts
-        .refine_factors
-        .iter()
-        .map(|f| c0 * f)
-        .filter(|c| *c > 1e-3)
-        .collect();
-    if fine_c.len() >= 3 {
-        let (lo, hi) = (fine_c[0], fine_c[fine_c.len() - 1]);
-        let mut fine = Vec::new();
-        for (c, r) in run_grid(&fine_c, refine_revs) {
-            match r {
-                Ok(p) => fine.push((c, p)),
-                Err(e) => notes.push(format!(
-                    "the model failed at clearance {c:.4} mm ({e}); left out of the fine grid"
-                )),
+    // A second pass when the estimate falls outside the first fine grid.
+    let mut fine_c: Vec<f64> = Vec::new();
+    let mut centre = fit_clearance(&full_meas, &curves_pred(&preds_ok, None), noise).0;
+    let mut full_pred;
+    let mut fit;
+    let mut pass = 0;
+    loop {
+        let new_c: Vec<f64> = opts
+            .refine_factors
+            .iter()
+            .map(|f| centre * f)
+            .filter(|c| *c > 1e-3 && !fine_c.iter().any(|x| (x - c).abs() < 1e-9))
+            .collect();
+        if new_c.len() >= 2 {
+            let (lo, hi) = (new_c[0], new_c[new_c.len() - 1]);
+            let mut fine = Vec::new();
+            for (c, r) in run_grid(&new_c, refine_revs) {
+                match r {
+                    Ok(p) => fine.push((c, p)),
+                    Err(e) => notes.push(format!(
+                        "the model failed at clearance {c:.4} mm ({e}); left out of the fine grid"
+                    )),
+                }
             }
-        }
-        if fine.len() >= 3 {
-            preds_ok.retain(|(c, _)| *c < lo * 0.999 || *c > hi * 1.001);
+            preds_ok.retain(|(c, _)| {
+                *c < lo * 0.999 || *c > hi * 1.001 || fine_c.iter().any(|x| (x - c).abs() < 1e-12)
+            });
+            fine_c.extend(fine.iter().map(|x| x.0));
             preds_ok.extend(fine);
             preds_ok.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
+        full_pred = curves_pred(&preds_ok, None);
+        fit = fit_clearance(&full_meas, &full_pred, noise);
+        pass += 1;
+        let (lo, hi) = fine_c
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+                (a.min(*c), b.max(*c))
+            });
+        if pass >= 2 || (fit.0 >= lo * 1.03 && fit.0 <= hi * 0.97) {
+            break;
+        }
+        centre = fit.0;
     }
     let grid_c: Vec<f64> = preds_ok.iter().map(|x| x.0).collect();
-    let full_pred = curves_pred(&preds_ok, None);
-    let (c_fit, dz, psi) = fit_clearance(&full_meas, &full_pred, noise);
+    let (c_fit, dz, psi) = fit;
     let profile: Vec<(f64, f64)> = full_pred
         .iter()
         .map(|(c, cu)| (*c, stroke_objective(&full_meas, cu, noise).0))
@@ -281,17 +300,26 @@ pub fn calibrate(
     // the measured noise added), each fitted like the log. The cycles of the
     // chaotic motion are correlated over several revolutions, so the
     // delete-a-block jackknife over the log's few blocks underestimates it.
-    let boot = bootstrap(&BootInput {
-        base,
-        motor_rpm,
-        popts: &popts,
-        c: c_fit,
-        k: k_meas,
-        windows: opts.boot_windows,
-        max_revs: opts.boot_max_revs,
-        noise,
-        grid: &full_pred,
-    });
+    let fine_nodes: Vec<(usize, &[Vec<f64>])> = preds_ok
+        .iter()
+        .enumerate()
+        .filter(|(i, (_, p))| {
+            let is_fine = |j: usize| {
+                preds_ok
+                    .get(j)
+                    .is_some_and(|(c, _)| fine_c.iter().any(|f| (f - c).abs() < 1e-12))
+            };
+            // Interior fine nodes only: a log of a node at the fine grid's
+            // edge would be fitted against a short, noisy coarse neighbour.
+            *i > 0
+                && is_fine(*i - 1)
+                && is_fine(*i)
+                && is_fine(*i + 1)
+                && p.stroke_revs.len() >= 2 * k_meas
+        })
+        .map(|(i, (_, p))| (i, p.stroke_revs.as_slice()))
+        .collect();
+    let boot = bootstrap(&full_pred, &fine_nodes, k_meas, noise, c_fit);
     progress.inc(1);
     let combine = |f: fn(&(f64, f64, f64)) -> f64| {
         let a = jackknife(&jk_meas.iter().map(f).collect::<Vec<_>>());
@@ -301,12 +329,30 @@ pub fn calibrate(
         (a * a + b * b).sqrt()
     };
     let sc = combine(|x| x.0);
+    // Coverage factor for the clearance: Student's t at 95 % for the
+    // Welch–Satterthwaite degrees of freedom of σ_c (its two parts are
+    // estimated from a few blocks or simulated logs, so 2σ would cover less
+    // than 95 %).
+    let k95 = {
+        let jm = jackknife(&jk_meas.iter().map(|x| x.0).collect::<Vec<_>>());
+        let bm = sample_sd(&boot.iter().map(|x| x.0).collect::<Vec<_>>());
+        let (a, nu_a) = if bm.is_finite() && bm >= jm {
+            (bm, boot.len().saturating_sub(1).max(1) as f64)
+        } else {
+            (jm, jk_meas.len().saturating_sub(1).max(1) as f64)
+        };
+        let b = jackknife(&jk_pred.iter().map(|x| x.0).collect::<Vec<_>>());
+        let nu_b = jk_pred.len().saturating_sub(1).max(1) as f64;
+        let b4 = if b.is_finite() { b.powi(4) / nu_b } else { 0.0 };
+        let nu = sc.powi(4) / (a.powi(4) / nu_a + b4);
+        t95(nu)
+    };
     let sdz = combine(|x| x.1);
     let spsi = combine(|x| x.2);
     if boot.len() >= 2 {
         let m = boot.iter().map(|x| x.0).sum::<f64>() / boot.len() as f64;
         notes.push(format!(
-            "clearance σ {:.4} mm: {} simulated logs of {k_meas} cycles at {c_fit:.4} mm gave {m:.4} ± {:.4} mm; jackknife over the log's blocks {:.4} mm, over the prediction's {:.4} mm",
+            "clearance σ {:.4} mm: {} simulated logs of {k_meas} cycles fitted with errors {m:+.4} ± {:.4} mm; jackknife over the log's blocks {:.4} mm, over the prediction's {:.4} mm",
             sc,
             boot.len(),
             sample_sd(&boot.iter().map(|x| x.0).collect::<Vec<_>>()),
@@ -398,7 +444,7 @@ pub fn calibrate(
             base,
             (nominal_so, 200e-6),
             (2.0, 200e-6),
-            30,
+            22,
         );
         let nb_f = nb.min(all.len());
         let jk: Vec<(f64, f64, Vec<f64>)> = (0..nb_f)
@@ -410,7 +456,7 @@ pub fn calibrate(
                     .filter(|(i, _)| i * nb_f / all.len() != b)
                     .map(|(_, c)| *c)
                     .collect();
-                fit_force(&sub, &knots, fixed, base, (so, tau), (0.3, 60e-6), 18)
+                fit_force(&sub, &knots, fixed, base, (so, tau), (0.3, 60e-6), 15)
             })
             .collect();
         progress.inc(1);
@@ -428,7 +474,7 @@ pub fn calibrate(
                 let fc = make_fcycles(d, ps);
                 let refs: Vec<&ForceCycle> = fc.iter().collect();
                 let (so2, tau2, _) =
-                    fit_force(&refs, &knots, fixed, base, (so, tau), (0.3, 60e-6), 24);
+                    fit_force(&refs, &knots, fixed, base, (so, tau), (0.3, 60e-6), 16);
                 (so2 - so, tau2 - tau)
             })
             .collect();
@@ -516,7 +562,7 @@ pub fn calibrate(
             nominal: Some(nominal_c),
             value: c_fit,
             sigma: sc,
-            u95: 2.0 * sc,
+            u95: k95 * sc,
             method: "spread and mean of the stroke across cycles against the model's ensembles"
                 .into(),
         },

@@ -1,13 +1,11 @@
 //! Fitting the clearance from the stroke: curves over the cycle, their
 //! interpolation across the simulated clearance grid, a golden-section search.
 
-use crate::model::Params;
-use crate::overlay::predict::{PredictOptions, predict};
-use crate::progress::Progress;
 use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 /// Stroke curves of one prediction: mean, spread and the mean's derivative in φ.
+#[derive(Clone)]
 pub(super) struct Curves {
     pub(super) mean: Vec<f64>,
     pub(super) spread: Vec<f64>,
@@ -171,7 +169,11 @@ pub(super) fn interp_curves(grid: &[(f64, Curves)], c: f64) -> Curves {
 
 pub(super) use crate::solver::roots::golden_min as golden;
 
-/// The clearance that minimises the stroke objective (grid, then golden section).
+/// The clearance that minimises the stroke objective: the best grid node,
+/// a scan of 64 points between its neighbours (the interpolated objective
+/// has kinks at the nodes and need not be unimodal there: a golden section
+/// alone can end in the wrong dip and move a refit by half a node spacing),
+/// then a golden section around the best point of the scan.
 pub(super) fn fit_clearance(m: &Curves, grid: &[(f64, Curves)], noise: f64) -> (f64, f64, f64) {
     let obj = |c: f64| stroke_objective(m, &interp_curves(grid, c), noise).0;
     let k = (0..grid.len())
@@ -179,7 +181,13 @@ pub(super) fn fit_clearance(m: &Curves, grid: &[(f64, Curves)], noise: f64) -> (
         .unwrap_or(0);
     let lo = grid[k.saturating_sub(1)].0;
     let hi = grid[(k + 1).min(grid.len() - 1)].0;
-    let c = golden(lo, hi, 40, obj);
+    let scan = 64;
+    let h = (hi - lo) / scan as f64;
+    let best = (0..=scan)
+        .map(|i| lo + h * i as f64)
+        .min_by(|a, b| obj(*a).total_cmp(&obj(*b)))
+        .unwrap_or(grid[k].0);
+    let c = golden((best - h).max(lo), (best + h).min(hi), 30, obj);
     let (_, dz, psi, _, _) = stroke_objective(m, &interp_curves(grid, c), noise);
     (c, dz, psi)
 }
@@ -195,66 +203,90 @@ pub(super) fn sample_sd(v: &[f64]) -> f64 {
     (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1.0)).sqrt()
 }
 
-/// What [`bootstrap`] simulates and fits against.
-pub(super) struct BootInput<'a> {
-    pub(super) base: &'a Params,
-    pub(super) motor_rpm: f64,
-    pub(super) popts: &'a PredictOptions,
-    /// Clearance simulated (mm).
-    pub(super) c: f64,
-    /// Cycles per simulated log (the measured log's).
-    pub(super) k: usize,
-    pub(super) windows: usize,
-    pub(super) max_revs: usize,
-    /// Laser noise σ added to every sample (mm).
-    pub(super) noise: f64,
-    pub(super) grid: &'a [(f64, Curves)],
-}
-
-/// Parametric bootstrap of the stroke fit: `windows` logs of `k` consecutive
-/// revolutions of the model at clearance `c` (fewer when that would exceed
-/// `max_revs`, at least 6), simulated as 4 independent runs (clearances
-/// c·(1 + i·10⁻⁶): the chaotic motion forgets the difference within a few
-/// revolutions), noise added, each fitted like a measured log. Returns the
-/// fits (c, Δz, ψ); empty when the model fails.
-pub(super) fn bootstrap(b: &BootInput) -> Vec<(f64, f64, f64)> {
-    let k = b.k.max(2);
-    let windows = b.windows.min(b.max_revs / k).max(6);
-    let runs = 4usize.min(windows);
-    let per_run = windows.div_ceil(runs);
-    let sims: Vec<Vec<Vec<f64>>> = (0..runs)
-        .into_par_iter()
-        .filter_map(|i| {
-            let mut p = b.base.clone();
-            p.clearance = b.c * 1e-3 * (1.0 + 1e-6 * (i as f64 + 1.0));
-            let o = PredictOptions {
-                revs: per_run * k,
-                warmup: b.popts.warmup + 2.0,
-                ..b.popts.clone()
-            };
-            predict(&p, b.motor_rpm, &o, &Progress::hidden())
-                .ok()
-                .map(|r| r.stroke_revs)
-        })
-        .collect();
-    let mut wins: Vec<&[Vec<f64>]> = Vec::new();
-    for revs in &sims {
-        for w in revs.chunks_exact(k) {
-            wins.push(w);
-        }
-    }
-    wins.truncate(windows);
-    let n = b.grid.first().map_or(0, |g| g.1.mean.len());
-    wins.par_iter()
+/// Parametric bootstrap of the stroke fit from the long ensembles of the
+/// fine grid: each fine node's revolutions are cut into logs of `k`
+/// consecutive revolutions; each such log, with noise σ `noise` added, is
+/// fitted like a measured log against the grid in which that node's curves
+/// are rebuilt without it (so it is not fitted against itself). Returns the
+/// errors of the fits against the node's clearance, scaled to `c_ref` (the
+/// sampling spread is about proportional to the clearance): (c, Δz, ψ) −
+/// (c_node, 0, 0). `fine` holds (index into `grid`, the node's revolutions).
+pub(super) fn bootstrap(
+    grid: &[(f64, Curves)],
+    fine: &[(usize, &[Vec<f64>])],
+    k: usize,
+    noise: f64,
+    c_ref: f64,
+) -> Vec<(f64, f64, f64)> {
+    let k = k.max(2);
+    let n = grid.first().map_or(0, |g| g.1.mean.len());
+    let jobs: Vec<(usize, usize)> = fine
+        .iter()
         .enumerate()
-        .map(|(i, w)| {
-            let mut rng = crate::rng::SplitMix64::<0xB007_57A9_0000_0001>::new(i as u64 + 1);
-            let noisy: Vec<Vec<f64>> = w
+        .flat_map(|(f, (_, revs))| (0..revs.len() / k).map(move |w| (f, w)))
+        .collect();
+    jobs.par_iter()
+        .map(|&(f, w)| {
+            let (gi, revs) = fine[f];
+            let c_node = grid[gi].0;
+            let rest: Vec<&[f64]> = revs
                 .iter()
-                .map(|row| row.iter().map(|x| x + b.noise * rng.normal()).collect())
+                .enumerate()
+                .filter(|(i, _)| i / k != w)
+                .map(|(_, v)| v.as_slice())
+                .collect();
+            let mut g: Vec<(f64, Curves)> = grid
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != gi)
+                .map(|(_, (c, cu))| (*c, cu.clone()))
+                .collect();
+            let at = g.partition_point(|x| x.0 < c_node);
+            g.insert(at, (c_node, curves_windowed(&rest, n, k)));
+            let mut rng =
+                crate::rng::SplitMix64::<0xB007_57A9_0000_0001>::new((f * 100_003 + w) as u64 + 1);
+            let noisy: Vec<Vec<f64>> = revs[w * k..(w + 1) * k]
+                .iter()
+                .map(|row| row.iter().map(|x| x + noise * rng.normal()).collect())
                 .collect();
             let rows: Vec<&[f64]> = noisy.iter().map(|v| v.as_slice()).collect();
-            fit_clearance(&curves_of(&rows, n), b.grid, b.noise)
+            let (c, dz, psi) = fit_clearance(&curves_of(&rows, n), &g, noise);
+            ((c - c_node) * c_ref / c_node, dz, psi)
         })
         .collect()
+}
+
+/// Student's t two-sided 95 % quantile for ν degrees of freedom (table,
+/// linear in 1/ν between its rows; 1.96 for ν → ∞, 12.71 for ν ≤ 1).
+pub(super) fn t95(nu: f64) -> f64 {
+    const T: [(f64, f64); 16] = [
+        (1.0, 12.706),
+        (2.0, 4.303),
+        (3.0, 3.182),
+        (4.0, 2.776),
+        (5.0, 2.571),
+        (6.0, 2.447),
+        (7.0, 2.365),
+        (8.0, 2.306),
+        (10.0, 2.228),
+        (12.0, 2.179),
+        (15.0, 2.131),
+        (20.0, 2.086),
+        (30.0, 2.042),
+        (60.0, 2.000),
+        (120.0, 1.980),
+        (f64::INFINITY, 1.960),
+    ];
+    if !nu.is_finite() || nu.is_nan() {
+        return if nu.is_nan() { 2.0 } else { 1.960 };
+    }
+    if nu <= 1.0 {
+        return T[0].1;
+    }
+    let i = T.partition_point(|x| x.0 < nu).min(T.len() - 1);
+    let (n0, t0) = T[i - 1];
+    let (n1, t1) = T[i];
+    let x = |n: f64| if n.is_finite() { 1.0 / n } else { 0.0 };
+    let w = (x(nu) - x(n0)) / (x(n1) - x(n0));
+    t0 + w * (t1 - t0)
 }
