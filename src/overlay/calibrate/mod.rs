@@ -470,7 +470,7 @@ pub fn calibrate(
             base,
             (nominal_so, 200e-6),
             (2.0, 200e-6),
-            22,
+            30,
         );
         let nb_f = nb.min(all.len());
         let jk: Vec<(f64, f64, Vec<f64>)> = (0..nb_f)
@@ -482,7 +482,7 @@ pub fn calibrate(
                     .filter(|(i, _)| i * nb_f / all.len() != b)
                     .map(|(_, c)| *c)
                     .collect();
-                fit_force(&sub, &knots, fixed, base, (so, tau), (0.3, 60e-6), 15)
+                fit_force(&sub, &knots, fixed, base, (so, tau), (0.3, 60e-6), 18)
             })
             .collect();
         progress.inc(1);
@@ -500,7 +500,7 @@ pub fn calibrate(
                 let fc = make_fcycles(d, ps);
                 let refs: Vec<&ForceCycle> = fc.iter().collect();
                 let (so2, tau2, _) =
-                    fit_force(&refs, &knots, fixed, base, (so, tau), (0.3, 60e-6), 16);
+                    fit_force(&refs, &knots, fixed, base, (so, tau), (0.3, 60e-6), 24);
                 (so2 - so, tau2 - tau)
             })
             .collect();
@@ -713,6 +713,35 @@ mod tests {
             .collect();
         let se = (v.iter().map(|x| (x - 2.5f64).powi(2)).sum::<f64>() / 3.0 / 4.0).sqrt();
         assert!((jackknife(&means) - se).abs() < 1e-12);
+    }
+
+    #[test]
+    fn t95_matches_the_table_of_student_t() {
+        // Two-sided 95 % quantiles (any statistics table).
+        for (nu, t) in [(1.0, 12.706), (5.0, 2.571), (15.0, 2.131), (1e9, 1.960)] {
+            assert!((t95(nu) - t).abs() < 1e-3, "ν {nu}: {}", t95(nu));
+        }
+        // Between rows: between the neighbours.
+        let t = t95(9.0);
+        assert!(t < 2.306 && t > 2.228, "{t}");
+    }
+
+    #[test]
+    fn windowed_spread_of_independent_rows_is_c4_times_sigma() {
+        // Rows = constant + N(0, 1) per point: the mean of the σ of windows
+        // of 4 rows is c4(4)·1 = 0.9213 (the measured statistic at k = 4),
+        // while the σ over all rows is ≈ 1.
+        let mut rng = crate::rng::SplitMix64::<7>::new(3);
+        let rows: Vec<Vec<f64>> = (0..4000)
+            .map(|_| (0..8).map(|_| rng.normal()).collect())
+            .collect();
+        let refs: Vec<&[f64]> = rows.iter().map(|r| r.as_slice()).collect();
+        let w = curves_windowed(&refs, 8, 4);
+        let all = curves_of(&refs, 8);
+        for j in 0..8 {
+            assert!((w.spread[j] - 0.9213).abs() < 0.02, "{}", w.spread[j]);
+            assert!((all.spread[j] - 1.0).abs() < 0.03, "{}", all.spread[j]);
+        }
     }
 
     #[test]
