@@ -64,7 +64,8 @@ pub(super) fn force_fit(
     };
     let mut ata = vec![0.0; k * k];
     let mut atb = vec![0.0; k];
-    let mut cols: Vec<Vec<f64>> = Vec::new();
+    // The regressors of the fitted samples, k per sample (flat: one allocation).
+    let mut cols: Vec<f64> = Vec::new();
     let mut ys: Vec<f64> = Vec::new();
     let mut fixed_part: Vec<f64> = Vec::new();
     let mut b = vec![0.0; k];
@@ -119,7 +120,7 @@ pub(super) fn force_fit(
                 && y.is_finite()
                 && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5)
             {
-                cols.push(state.clone());
+                cols.extend_from_slice(&state);
                 ys.push(y);
                 fixed_part.push(state_wd);
             }
@@ -128,7 +129,7 @@ pub(super) fn force_fit(
     let vals: Vec<f64> = match fixed {
         Some(v) => v.to_vec(),
         None => {
-            for ((r, &y), &fw) in cols.iter().zip(&ys).zip(&fixed_part) {
+            for ((r, &y), &fw) in cols.chunks_exact(k).zip(&ys).zip(&fixed_part) {
                 for i in 0..k {
                     atb[i] += r[i] * (y - fw);
                     for j in 0..k {
@@ -157,7 +158,7 @@ pub(super) fn force_fit(
         }
     };
     let mut ss = 0.0;
-    for ((r, &y), &fw) in cols.iter().zip(&ys).zip(&fixed_part) {
+    for ((r, &y), &fw) in cols.chunks_exact(k).zip(&ys).zip(&fixed_part) {
         let pred: f64 = r.iter().zip(&vals).map(|(a, b)| a * b).sum::<f64>() + fw;
         ss += (y - pred).powi(2);
     }

@@ -89,6 +89,22 @@ impl ModelTruth {
         grid_deg: f64,
         rtol: f64,
     ) -> Result<Self, crate::sim::SimError> {
+        Self::simulate_perturbed(p, cfg, warmup, grid_deg, rtol, 0.0)
+    }
+
+    /// [`ModelTruth::simulate`] from a pin bar started `perturb_x4` (m) off
+    /// the model's initial position: another realisation of the chaotic
+    /// clearance motion (the calibration's own predictions start at 0, so a
+    /// log made from them would share their trajectory for the first
+    /// revolutions; a real rig does not).
+    pub fn simulate_perturbed(
+        p: &Params,
+        cfg: &SynthConfig,
+        warmup: f64,
+        grid_deg: f64,
+        rtol: f64,
+        perturb_x4: f64,
+    ) -> Result<Self, crate::sim::SimError> {
         let mut p = p.clone();
         p.motor_rpm = cfg.motor_rpm;
         p.gear_ratio = cfg.gear_ratio;
@@ -103,6 +119,7 @@ impl ModelTruth {
             revs,
             rtol,
             grid_deg: Some(grid_deg),
+            perturb_x4,
             ..crate::sim::SimOptions::default()
         };
         let r = crate::sim::simulate(&p, &so, &crate::progress::Progress::hidden())?;
