@@ -84,6 +84,53 @@ impl<'a> CycleCurve<'a> {
         })
     }
 
+    /// [`CycleCurve::force_at`] at many abscissae, with the curve's points
+    /// built once: one walk along the curve when both the points and `xs`
+    /// ascend (the crank-angle axis, a clean stroke branch), the first
+    /// crossing for each x otherwise. Same answers as `force_at`.
+    pub fn forces_at(&self, axis: Axis, branch: Branch, xs: &[f64]) -> Vec<Option<f64>> {
+        let p = self.points(axis, branch);
+        let first_crossing = |x: f64| {
+            p.windows(2).find_map(|w| {
+                let ((x0, f0), (x1, f1)) = (w[0], w[1]);
+                let between = (x0 <= x && x <= x1) || (x1 <= x && x <= x0);
+                if !between {
+                    return None;
+                }
+                if x1 == x0 {
+                    return Some(f0);
+                }
+                Some(f0 + (f1 - f0) * (x - x0) / (x1 - x0))
+            })
+        };
+        fn ascending(mut v: impl Iterator<Item = f64>) -> bool {
+            let mut prev = f64::NEG_INFINITY;
+            v.all(|x| {
+                let ok = x > prev;
+                prev = x;
+                ok
+            })
+        }
+        if !(ascending(p.iter().map(|q| q.0)) && ascending(xs.iter().copied())) {
+            return xs.iter().map(|&x| first_crossing(x)).collect();
+        }
+        // Strictly ascending points: the segment holding x is the first
+        // whose right end reaches it, and it moves only forwards.
+        let mut j = 0;
+        xs.iter()
+            .map(|&x| {
+                while j + 1 < p.len() && p[j + 1].0 < x {
+                    j += 1;
+                }
+                if j + 1 >= p.len() || x < p[j].0 {
+                    return None;
+                }
+                let ((x0, f0), (x1, f1)) = (p[j], p[j + 1]);
+                Some(f0 + (f1 - f0) * (x - x0) / (x1 - x0))
+            })
+            .collect()
+    }
+
     /// A derived process value (None: the data it needs is missing).
     pub fn value(&self, q: Quantity, at_depth_mm: Option<f64>) -> Option<f64> {
         let c = self.cycle;

@@ -7,6 +7,7 @@ use super::objects::{self, ObjectResult};
 use super::recipe::{Axis, EnvelopeMode, ProcessRecipe, Quantity};
 use super::spc::{Capability, ControlChart, capability, control_chart};
 use crate::rig::cycles::CycleSet;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -146,35 +147,45 @@ fn evaluate_objects(r: &ProcessRecipe, curve: &CycleCurve, envelopes: bool) -> V
 /// Judges every cycle of the set.
 pub fn monitor(r: &ProcessRecipe, cs: &CycleSet) -> MonitorReport {
     let force_needed = needs_force(r);
-    let mut cycles = Vec::with_capacity(cs.cycles.len());
-    let mut nok_by: Vec<usize> = vec![0; r.object_count()];
-    for c in &cs.cycles {
-        let curve = CycleCurve::new(cs, c);
-        let mut v = CycleVerdict {
-            index: c.index,
-            t_start_ns: c.t_start_ns,
-            motor_rpm: c.motor_rpm_mean,
-            status: CycleStatus::NotEvaluated,
-            why_not: not_evaluable(&curve, force_needed),
-            failed: Vec::new(),
-            values: BTreeMap::new(),
-        };
-        if v.why_not.is_none() {
-            let results = evaluate_objects(r, &curve, true);
-            for (k, o) in results.iter().enumerate() {
-                if !o.ok {
-                    nok_by[k] += 1;
-                }
-                if let (Some(x), "value") = (o.value, o.kind) {
-                    v.values.insert(o.name.clone(), x);
-                }
-            }
-            v.failed = results.into_iter().filter(|o| !o.ok).collect();
-            v.status = if v.failed.is_empty() {
-                CycleStatus::Ok
-            } else {
-                CycleStatus::Nok
+    // Cycles are independent: judged in parallel, counted in order.
+    let judged: Vec<(CycleVerdict, Vec<bool>)> = cs
+        .cycles
+        .par_iter()
+        .map(|c| {
+            let curve = CycleCurve::new(cs, c);
+            let mut v = CycleVerdict {
+                index: c.index,
+                t_start_ns: c.t_start_ns,
+                motor_rpm: c.motor_rpm_mean,
+                status: CycleStatus::NotEvaluated,
+                why_not: not_evaluable(&curve, force_needed),
+                failed: Vec::new(),
+                values: BTreeMap::new(),
             };
+            let mut nok = Vec::new();
+            if v.why_not.is_none() {
+                let results = evaluate_objects(r, &curve, true);
+                nok = results.iter().map(|o| !o.ok).collect();
+                for o in &results {
+                    if let (Some(x), "value") = (o.value, o.kind) {
+                        v.values.insert(o.name.clone(), x);
+                    }
+                }
+                v.failed = results.into_iter().filter(|o| !o.ok).collect();
+                v.status = if v.failed.is_empty() {
+                    CycleStatus::Ok
+                } else {
+                    CycleStatus::Nok
+                };
+            }
+            (v, nok)
+        })
+        .collect();
+    let mut nok_by: Vec<usize> = vec![0; r.object_count()];
+    let mut cycles = Vec::with_capacity(judged.len());
+    for (v, nok) in judged {
+        for (k, bad) in nok.into_iter().enumerate() {
+            nok_by[k] += usize::from(bad);
         }
         cycles.push(v);
     }
@@ -280,11 +291,12 @@ pub fn learn(
                 .collect(),
         };
         let (mut xs, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new());
-        for x in grid {
-            let f: Vec<f64> = good
-                .iter()
-                .filter_map(|c| c.force_at(e.x, e.branch, x))
-                .collect();
+        let per_cycle: Vec<Vec<Option<f64>>> = good
+            .iter()
+            .map(|c| c.forces_at(e.x, e.branch, &grid))
+            .collect();
+        for (i, x) in grid.into_iter().enumerate() {
+            let f: Vec<f64> = per_cycle.iter().filter_map(|v| v[i]).collect();
             if f.len() * 2 < good.len() || f.len() < 2 {
                 continue;
             }

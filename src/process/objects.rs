@@ -272,8 +272,9 @@ pub fn envelope(e: &Envelope, curve: &CycleCurve) -> ObjectResult {
     let mut worst: Option<(f64, f64, bool)> = None; // (excess, x, above)
     let mut outside = 0;
     let mut missing = 0;
-    for ((&x, &lo), &hi) in e.x_grid.iter().zip(&e.lo).zip(&e.hi) {
-        let Some(f) = curve.force_at(e.x, e.branch, x) else {
+    let forces = curve.forces_at(e.x, e.branch, &e.x_grid);
+    for (((&x, &lo), &hi), f) in e.x_grid.iter().zip(&e.lo).zip(&e.hi).zip(forces) {
+        let Some(f) = f else {
             missing += 1;
             continue;
         };
