@@ -11,8 +11,9 @@
 use super::PaneState;
 use super::chart::{ChartView, SeriesKind, SeriesView};
 use super::session::Session;
-use crate::process::monitor::{CycleStatus, CycleVerdict};
+use crate::process::monitor::{CycleStatus, CycleVerdict, MonitorReport};
 use crate::process::recipe::{Axis, ProcessRecipe};
+use crate::process::run::{LogMonitor, MonitorRun};
 use crate::process::spc::cpk_band;
 use crate::process::story::Confusion;
 use crate::rig::cycles::CycleSet;
@@ -97,7 +98,7 @@ pub struct LineView {
     pub pending: bool,
     pub message: Option<String>,
     /// The monitor's whole result (what `pinsight monitor --json` prints).
-    pub run: Option<crate::process::run::MonitorRun>,
+    pub run: Option<std::sync::Arc<MonitorRun>>,
 }
 
 impl LineView {
@@ -239,6 +240,30 @@ fn cycle_chart(
     ))
 }
 
+/// The log the pane shows (`line.log` among the logs that could be
+/// monitored) and its report.
+fn shown_log<'a>(
+    run: &'a MonitorRun,
+    ui: &PaneState,
+) -> Option<(&'a LogMonitor, &'a MonitorReport)> {
+    let monitored: Vec<_> = run
+        .logs
+        .iter()
+        .filter_map(|l| l.report.as_ref().ok().map(|r| (l, r)))
+        .collect();
+    monitored
+        .get(ui.line.log.min(monitored.len().saturating_sub(1)))
+        .copied()
+}
+
+/// Rows of the cycle list (what `j`/`k` move through), without building the view.
+pub fn cycle_count(s: &Session, ui: &PaneState) -> usize {
+    match &s.monitor {
+        Some(Ok(run)) => shown_log(run, ui).map_or(0, |(_, r)| r.cycles.len()),
+        _ => 0,
+    }
+}
+
 pub fn view(s: &Session, ui: &PaneState) -> LineView {
     if s.process_recipes.is_empty() {
         return empty(
@@ -266,11 +291,6 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
         Some(Err(e)) => return empty(format!("monitor: {e}"), false, s),
         Some(Ok(run)) => run,
     };
-    let monitored: Vec<_> = run
-        .logs
-        .iter()
-        .filter_map(|l| l.report.as_ref().ok().map(|r| (l, r)))
-        .collect();
     let not_monitored = run
         .logs
         .iter()
@@ -278,7 +298,7 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
         .collect();
     let mut v = empty(String::new(), false, s);
     v.message = None;
-    v.run = Some(run.clone());
+    v.run = Some(std::sync::Arc::clone(run));
     v.part_number = Some(run.part_number.clone());
     v.ok = run.ok;
     v.nok = run.nok;
@@ -316,7 +336,7 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
                 .map(move |a| format!("{}: rule {}: {}", c.name, a.rule, a.text))
         })
         .collect();
-    let Some(&(lm, rep)) = monitored.get(ui.line.log.min(monitored.len().saturating_sub(1))) else {
+    let Some((lm, rep)) = shown_log(run, ui) else {
         v.message = Some("no log could be monitored".into());
         return v;
     };

@@ -63,8 +63,9 @@ pub struct Session {
     /// Process recipes (evaluation objects per part number).
     pub process_recipes: Vec<crate::process::ProcessRecipe>,
     /// The process monitor over the logs (None: not run, or inputs changed
-    /// since), or why it could not run.
-    pub monitor: Option<Result<MonitorRun, String>>,
+    /// since), or why it could not run. Shared: the Line pane's view holds it
+    /// every frame without copying it.
+    pub monitor: Option<Result<std::sync::Arc<MonitorRun>, String>>,
 }
 
 impl Default for Session {
@@ -315,13 +316,18 @@ impl Session {
     /// each connector's story), reporting to (and stopped by) `progress`.
     pub fn run_monitor_with(&mut self, progress: &Progress) {
         let book = (!self.recipes.is_empty()).then(|| self.recipe_book());
-        self.monitor = Some(monitor_session(
+        self.set_monitor(monitor_session(
             &self.process_recipes,
             &self.logs,
             &self.images,
             book.as_ref(),
             progress,
         ));
+    }
+
+    /// Records a finished monitor run (or why it could not run).
+    pub fn set_monitor(&mut self, r: Result<MonitorRun, String>) {
+        self.monitor = Some(r.map(std::sync::Arc::new));
     }
 
     /// Runs the overlay of log `i` now.

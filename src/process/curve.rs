@@ -8,6 +8,22 @@ use crate::rig::cycles::{Cycle, CycleSet};
 /// Half-width of the windows around the dead centres for the impact-noise index, degrees.
 pub const NOISE_HALF_WIDTH_DEG: f64 = 15.0;
 
+/// The force where the points (x, force), in angle order, first pass `x`
+/// (linear between neighbours).
+fn first_crossing(p: &[(f64, f64)], x: f64) -> Option<f64> {
+    p.windows(2).find_map(|w| {
+        let ((x0, f0), (x1, f1)) = (w[0], w[1]);
+        let between = (x0 <= x && x <= x1) || (x1 <= x && x <= x0);
+        if !between {
+            return None;
+        }
+        if x1 == x0 {
+            return Some(f0);
+        }
+        Some(f0 + (f1 - f0) * (x - x0) / (x1 - x0))
+    })
+}
+
 /// A cycle on the set's grid.
 pub struct CycleCurve<'a> {
     pub angle: &'a [f64],
@@ -70,18 +86,7 @@ impl<'a> CycleCurve<'a> {
     /// grid points): on the angle axis at that angle, on the stroke axis the
     /// first crossing of that stroke on the branch.
     pub fn force_at(&self, axis: Axis, branch: Branch, x: f64) -> Option<f64> {
-        let p = self.points(axis, branch);
-        p.windows(2).find_map(|w| {
-            let ((x0, f0), (x1, f1)) = (w[0], w[1]);
-            let between = (x0 <= x && x <= x1) || (x1 <= x && x <= x0);
-            if !between {
-                return None;
-            }
-            if x1 == x0 {
-                return Some(f0);
-            }
-            Some(f0 + (f1 - f0) * (x - x0) / (x1 - x0))
-        })
+        first_crossing(&self.points(axis, branch), x)
     }
 
     /// [`CycleCurve::force_at`] at many abscissae, with the curve's points
@@ -90,19 +95,6 @@ impl<'a> CycleCurve<'a> {
     /// crossing for each x otherwise. Same answers as `force_at`.
     pub fn forces_at(&self, axis: Axis, branch: Branch, xs: &[f64]) -> Vec<Option<f64>> {
         let p = self.points(axis, branch);
-        let first_crossing = |x: f64| {
-            p.windows(2).find_map(|w| {
-                let ((x0, f0), (x1, f1)) = (w[0], w[1]);
-                let between = (x0 <= x && x <= x1) || (x1 <= x && x <= x0);
-                if !between {
-                    return None;
-                }
-                if x1 == x0 {
-                    return Some(f0);
-                }
-                Some(f0 + (f1 - f0) * (x - x0) / (x1 - x0))
-            })
-        };
         fn ascending(mut v: impl Iterator<Item = f64>) -> bool {
             let mut prev = f64::NEG_INFINITY;
             v.all(|x| {
@@ -112,7 +104,7 @@ impl<'a> CycleCurve<'a> {
             })
         }
         if !(ascending(p.iter().map(|q| q.0)) && ascending(xs.iter().copied())) {
-            return xs.iter().map(|&x| first_crossing(x)).collect();
+            return xs.iter().map(|&x| first_crossing(&p, x)).collect();
         }
         // Strictly ascending points: the segment holding x is the first
         // whose right end reaches it, and it moves only forwards.

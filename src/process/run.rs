@@ -57,10 +57,7 @@ impl MonitorRun {
         let confusion = (!stories.is_empty()).then(|| {
             let mut c = Confusion::default();
             for s in &stories {
-                c.process_ok_vision_pass += s.confusion.process_ok_vision_pass;
-                c.process_ok_vision_fail += s.confusion.process_ok_vision_fail;
-                c.process_nok_vision_pass += s.confusion.process_nok_vision_pass;
-                c.process_nok_vision_fail += s.confusion.process_nok_vision_fail;
+                c.merge(&s.confusion);
             }
             c
         });

@@ -39,6 +39,14 @@ impl Confusion {
         (fails > 0).then(|| self.process_nok_vision_fail as f64 / fails as f64)
     }
 
+    /// Adds another count (connectors of another log).
+    pub fn merge(&mut self, o: &Confusion) {
+        self.process_ok_vision_pass += o.process_ok_vision_pass;
+        self.process_ok_vision_fail += o.process_ok_vision_fail;
+        self.process_nok_vision_pass += o.process_nok_vision_pass;
+        self.process_nok_vision_fail += o.process_nok_vision_fail;
+    }
+
     pub fn total(&self) -> usize {
         self.process_ok_vision_pass
             + self.process_ok_vision_fail

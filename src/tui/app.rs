@@ -374,9 +374,7 @@ impl App {
                 self.ui.yields.selected = step(self.ui.yields.selected, n);
             }
             PaneId::Line => {
-                let n = crate::panes::line::view(&self.session, &self.ui)
-                    .cycles
-                    .len();
+                let n = crate::panes::line::cycle_count(&self.session, &self.ui);
                 let cur = self.ui.line.cycle.unwrap_or(n.saturating_sub(1));
                 self.ui.line.cycle = Some(step(cur.min(n.saturating_sub(1)), n));
             }

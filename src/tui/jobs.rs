@@ -246,7 +246,7 @@ impl App {
                     ),
                     Err(e) => (format!("monitor: {e}"), true),
                 });
-                self.session.monitor = Some(*r);
+                self.session.set_monitor(*r);
             }
             JobOutput::Yield(r) => {
                 let rep = &r.report;

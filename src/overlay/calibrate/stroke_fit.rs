@@ -72,17 +72,12 @@ pub(super) fn curves_windowed(rows: &[&[f64]], n: usize, w: usize) -> Curves {
     for j in 0..n {
         let mut sds = Vec::with_capacity(starts.len());
         for &a in &starts {
-            let v: Vec<f64> = rows[a..a + w]
-                .iter()
-                .map(|row| row[j])
-                .filter(|x| x.is_finite())
-                .collect();
-            if v.len() < 2 {
-                continue;
+            let column: Vec<f64> = rows[a..a + w].iter().map(|row| row[j]).collect();
+            // NaN: fewer than two finite values in the window.
+            let sd = sample_sd(&column);
+            if sd.is_finite() {
+                sds.push(sd);
             }
-            let k = v.len() as f64;
-            let m = v.iter().sum::<f64>() / k;
-            sds.push((v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1.0)).sqrt());
         }
         if sds.len() < 2 {
             continue;
