@@ -164,6 +164,23 @@ pub fn tick_label(v: f64) -> String {
     }
 }
 
+/// A linear axis's tick at zero comes out of the tick arithmetic as a
+/// rounding residue (`-1.39e-17` on an axis from -0.1 to 0.1): snap a tick
+/// closer to zero than a billionth of the axis span to zero.
+fn axis_tick(v: f64, log: bool, span: f64) -> f64 {
+    if !log && v.abs() < 1e-9 * span { 0.0 } else { v }
+}
+
+fn x_span(c: &LineChart) -> f64 {
+    let ((a, b), _) = c.ranges();
+    (b - a).abs()
+}
+
+fn y_span(c: &LineChart) -> f64 {
+    let (_, (a, b)) = c.ranges();
+    (b - a).abs()
+}
+
 /// Colour palette, chosen to stay distinct on white and in grey print.
 pub fn palette(i: usize) -> RGBColor {
     const P: [RGBColor; 10] = [
@@ -249,11 +266,14 @@ macro_rules! draw_line_chart_body {
     ($chart:expr, $c:expr, $title:expr) => {{
         let chart = $chart;
         let mut c = $c;
+        let (xs, ys) = (x_span(chart), y_span(chart));
+        let fx = |v: &f64| tick_label(axis_tick(*v, chart.log_x, xs));
+        let fy = |v: &f64| tick_label(axis_tick(*v, chart.log_y, ys));
         let mut mesh = c.configure_mesh();
         mesh.x_desc(chart.x_label.as_str())
             .y_desc(chart.y_label.as_str())
-            .x_label_formatter(&|v: &f64| tick_label(*v))
-            .y_label_formatter(&|v: &f64| tick_label(*v))
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
             .x_labels(8)
             .y_labels(8)
             .label_style((FONT_NAME, 13))
@@ -651,6 +671,8 @@ mod tests {
         assert_eq!(tick_label(123.456), "123");
         assert_eq!(tick_label(1.5), "1.5");
         assert_eq!(tick_label(0.0123), "0.0123");
+        assert_eq!(tick_label(axis_tick(-1.39e-17, false, 0.2)), "0");
+        assert_eq!(tick_label(axis_tick(1e-16, true, 1.0)), "1e-16");
         assert_eq!(tick_label(-2.0e6), "-2e6");
         assert_eq!(tick_label(0.0), "0");
         assert_eq!(tick_label(16.0), "16");

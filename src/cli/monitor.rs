@@ -7,6 +7,14 @@
 //! log with its cycle's verdict: the confusion of process NOK against
 //! vision fail, and the connectors where they disagree.
 //!
+//! `--band` adds the model's predicted band to each connector's story (an
+//! overlay prediction per log: the fraction of the cycle's stroke and force
+//! inside the band, the stroke residual at BDC).
+//!
+//! `--out DIR` writes monitor.json, cycles.csv, spc.csv (process values and
+//! pin positions, overall, by lot, by speed), connectors.csv (with `-r`)
+//! and a control chart PNG per characteristic (`chart-<name>.png`).
+//!
 //! `--learn N` first learns the recipe's envelopes from the first N good
 //! cycles and writes the recipe back (atomically), then monitors with it.
 //!
@@ -17,6 +25,7 @@
 use crate::cli::common::{outln, outp};
 use crate::engine::process::{learn_from_logs, monitor_logs};
 use crate::process::ProcessRecipe;
+use crate::process::charts::chart_files;
 use crate::process::report::{connectors_csv, cycles_csv, spc_csv, summary_text};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::RecipeBook;
@@ -36,6 +45,10 @@ pub struct Args {
     /// and join it with its cycle's verdict (the connector's whole story).
     #[arg(short = 'r', long = "recipe", value_name = "RECIPE.toml")]
     pub recipes: Vec<PathBuf>,
+    /// Join the model's predicted band for each cycle to its connector's story (runs the
+    /// overlay prediction per log).
+    #[arg(long, requires = "recipes")]
+    pub band: bool,
     /// Learn the recipe's envelopes from the first N good cycles and save them into the recipe.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=100_000))]
     pub learn: Option<u32>,
@@ -45,7 +58,7 @@ pub struct Args {
     /// Print one CSV row per cycle.
     #[arg(long)]
     pub csv: bool,
-    /// Write monitor.json, cycles.csv and spc.csv into this folder.
+    /// Write monitor.json, cycles.csv, spc.csv, connectors.csv and control chart PNGs into this folder.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Also write the process values as a Q-DAS ASCII transfer file (AQDEF .dfq) for SPC packages.
@@ -73,7 +86,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         learned = Some(format!("{note}; saved to {}", args.process.display()));
     }
     let book = (!args.recipes.is_empty()).then(|| RecipeBook::load(&args.recipes));
-    let mut run = monitor_logs(&recipe, &args.logs, &opts, book.as_ref(), &progress);
+    let mut run = monitor_logs(
+        &recipe,
+        &args.logs,
+        &opts,
+        book.as_ref(),
+        args.band,
+        &progress,
+    );
     run.learned = learned;
     drop(_bar);
     if let Some(dir) = &args.out {
@@ -83,6 +103,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         rep.add("spc.csv", spc_csv(&run).as_bytes())?;
         if run.confusion.is_some() {
             rep.add("connectors.csv", connectors_csv(&run).as_bytes())?;
+        }
+        for (name, png) in chart_files(&run)? {
+            rep.add(&name, &png)?;
         }
         rep.commit()?;
     }

@@ -12,7 +12,9 @@ use super::entries::{ImageEntry, LogEntry};
 use super::vision::{YieldInput, run_yield_inputs, yield_item};
 use crate::model::params::Params;
 use crate::process::run::{LogMonitor, MonitorRun};
-use crate::process::story::join;
+use super::overlay::OverlayRun;
+use crate::overlay::compare::OverlayOptions;
+use crate::process::story::{BandFit, join};
 use crate::process::{ProcessRecipe, learn, monitor};
 use crate::progress::Progress;
 use crate::rig::cycles::{CycleOptions, CycleSet};
@@ -60,12 +62,13 @@ pub fn learn_from_logs(
 
 /// Judges one log's cycles; with `photos` (its camera images as yield
 /// inputs) and vision recipes, joins each connector's photograph with its
-/// cycle's verdict.
+/// cycle's verdict and (from `bands`, by cycle index) the model's band.
 pub fn monitor_log(
     recipe: &ProcessRecipe,
     log: &RigLog,
     cs: &CycleSet,
     photos: Option<(&[YieldInput], &RecipeBook)>,
+    bands: &BTreeMap<u64, BandFit>,
     progress: &Progress,
 ) -> LogMonitor {
     let mut rep = monitor(recipe, cs);
@@ -84,7 +87,7 @@ pub fn monitor_log(
             GroupBy::Lot,
             &progress.child(),
         );
-        join(&log.file, &rep.cycles, &run.results, &BTreeMap::new())
+        join(&log.file, &rep.cycles, &run.results, bands)
     });
     LogMonitor {
         file: log.file.clone(),
@@ -106,13 +109,28 @@ fn not_monitored(file: String, why: String) -> LogMonitor {
     }
 }
 
+/// The model's band for every cycle of a log: the overlay job with the
+/// Overlay pane's defaults (the `paper` preset with the log's `rig`
+/// metadata, the clearance level, each speed group at its logged speed).
+pub fn model_bands(
+    log: &RigLog,
+    cs: &CycleSet,
+    progress: &Progress,
+) -> Result<BTreeMap<u64, BandFit>, String> {
+    let rep = super::overlay::overlay_job(log, cs, None, &[], &OverlayOptions::default(), progress)?;
+    Ok(BandFit::of_overlay(&rep))
+}
+
 /// The monitor job over log files (`pinsight monitor`); with `vision`,
-/// each log's camera images are inspected and joined with their cycles.
+/// each log's camera images are inspected and joined with their cycles;
+/// with `band`, each connector's story gets the model's band for its cycle
+/// (an overlay prediction per log).
 pub fn monitor_logs(
     recipe: &ProcessRecipe,
     paths: &[PathBuf],
     opts: &LoadOptions,
     vision: Option<&RecipeBook>,
+    band: bool,
     progress: &Progress,
 ) -> MonitorRun {
     progress.set_total(paths.len() as u64);
@@ -131,13 +149,25 @@ pub fn monitor_logs(
                             items.into_iter().map(YieldInput::Image).collect();
                         (inputs, book)
                     });
-                    monitor_log(
+                    let (bands, band_note) = match band {
+                        true => match model_bands(&log, &cs, &progress.child()) {
+                            Ok(b) => (b, None),
+                            Err(e) => (BTreeMap::new(), Some(format!("no model band: {e}"))),
+                        },
+                        false => (BTreeMap::new(), None),
+                    };
+                    let mut m = monitor_log(
                         recipe,
                         &log,
                         &cs,
                         photos.as_ref().map(|(i, b)| (i.as_slice(), *b)),
+                        &bands,
                         progress,
-                    )
+                    );
+                    if let (Some(n), Ok(r)) = (band_note, &mut m.report) {
+                        r.notes.push(n);
+                    }
+                    m
                 }
                 Err(e) => not_monitored(p.display().to_string(), e),
             };
@@ -164,12 +194,15 @@ pub fn recipe_for<'a>(
 /// monitor`): each log judged by the process recipe of its part (or the
 /// only one); with vision recipes, the session's images of each log are
 /// its connectors' photographs. The run is reported under the first log's
-/// recipe; a log whose part has no recipe is listed as not monitored.
+/// recipe; a log whose part has no recipe is listed as not monitored. A
+/// log whose overlay has run (`overlays`, by log index) gives its
+/// connectors the model's band.
 pub fn monitor_session(
     recipes: &[ProcessRecipe],
     logs: &[LogEntry],
     images: &[ImageEntry],
     book: Option<&RecipeBook>,
+    overlays: &BTreeMap<usize, OverlayRun>,
     progress: &Progress,
 ) -> Result<MonitorRun, String> {
     if recipes.is_empty() {
@@ -181,7 +214,7 @@ pub fn monitor_session(
     progress.set_total(logs.len() as u64);
     let mut chosen: Option<&ProcessRecipe> = None;
     let mut out = Vec::new();
-    for l in logs {
+    for (i, l) in logs.iter().enumerate() {
         let Some((log, cs)) = &l.rig else {
             out.push(not_monitored(
                 l.path.clone(),
@@ -221,7 +254,19 @@ pub fn monitor_session(
             .filter(|i| i.meta.log.as_deref() == Some(l.path.as_str()))
             .map(yield_item)
             .collect();
-        let mut m = monitor_log(r, log, cs, book.map(|b| (inputs.as_slice(), b)), progress);
+        let bands = overlays
+            .get(&i)
+            .and_then(|o| o.report.as_ref().ok())
+            .map(|r| BandFit::of_overlay(r))
+            .unwrap_or_default();
+        let mut m = monitor_log(
+            r,
+            log,
+            cs,
+            book.map(|b| (inputs.as_slice(), b)),
+            &bands,
+            progress,
+        );
         m.file = l.path.clone();
         if let Some(s) = &mut m.story {
             for c in &mut s.connectors {

@@ -11,11 +11,13 @@
 use super::PaneState;
 use super::chart::{ChartView, SeriesKind, SeriesView};
 use super::session::Session;
-use crate::process::monitor::{CycleStatus, CycleVerdict, MonitorReport};
+use crate::process::monitor::{Characteristic, CycleStatus, CycleVerdict, MonitorReport};
+use crate::process::report::{PIN_SPC_LISTED, band_counts, by_cpk};
 use crate::process::recipe::{Axis, ProcessRecipe};
 use crate::process::run::{LogMonitor, MonitorRun};
 use crate::process::spc::cpk_band;
-use crate::process::story::Confusion;
+use crate::process::story::{Confusion, ConnectorStory};
+use crate::vision::batch::ItemStatus;
 use crate::rig::cycles::CycleSet;
 use serde::Serialize;
 
@@ -88,6 +90,14 @@ pub struct LineView {
     /// The selected cycle's force against its objects' x axis.
     pub chart: Option<ChartView>,
     pub spc: Vec<SpcRow>,
+    /// The pins' positions: the characteristics with the lowest Cpk (up to
+    /// [`crate::process::report::PIN_SPC_LISTED`]), and how many pin
+    /// characteristics fall in each band.
+    pub pin_spc: Vec<SpcRow>,
+    pub pin_summary: Option<String>,
+    /// The selected cycle's connector: its photograph's verdict with
+    /// reasons and the model's band, when the run has stories.
+    pub connector: Option<String>,
     /// Run-rule alarms ("peak force: rule 1: point 3 beyond 3σ …").
     pub alarms: Vec<String>,
     pub confusion: Option<Confusion>,
@@ -132,6 +142,9 @@ fn empty(message: String, pending: bool, s: &Session) -> LineView {
         selected: 0,
         chart: None,
         spc: Vec::new(),
+        pin_spc: Vec::new(),
+        pin_summary: None,
+        connector: None,
         alarms: Vec::new(),
         confusion: None,
         disagreements: Vec::new(),
@@ -139,6 +152,41 @@ fn empty(message: String, pending: bool, s: &Session) -> LineView {
         pending,
         message: Some(message),
         run: None,
+    }
+}
+
+fn spc_row(c: &Characteristic) -> SpcRow {
+    let k = c.capability.as_ref();
+    SpcRow {
+        name: c.name.clone(),
+        unit: c.unit,
+        n: k.map_or(0, |k| k.n),
+        mean: k.map(|k| k.mean),
+        sigma_within: k.map(|k| k.sigma_within),
+        cp: k.and_then(|k| k.cp),
+        cpk: k.and_then(|k| k.cpk),
+        ppk: k.and_then(|k| k.ppk),
+        band: k.and_then(|k| k.cpk).map_or("–", cpk_band),
+        alarms: c.chart.as_ref().map_or(0, |ch| ch.alarms.len()),
+    }
+}
+
+/// A connector's photograph and model band on one line.
+fn connector_line(c: &ConnectorStory) -> String {
+    let vision = match c.vision {
+        Some(ItemStatus::Pass) => "vision pass".to_string(),
+        Some(ItemStatus::Fail) => format!("vision fail: {}", c.vision_reasons.join("; ")),
+        Some(ItemStatus::Error) => format!("image error: {}", c.vision_reasons.join("; ")),
+        None => "no photograph".to_string(),
+    };
+    match &c.band {
+        Some(b) => format!(
+            "{vision}; model band: stroke {:.0} % inside, force {:.0} % inside, BDC {:+.3} mm",
+            100.0 * b.stroke_in_band,
+            100.0 * b.force_in_band,
+            b.stroke_err_bdc_mm
+        ),
+        None => vision,
     }
 }
 
@@ -307,28 +355,23 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
     v.nok_fraction = (evaluated > 0).then(|| run.nok as f64 / evaluated as f64);
     v.not_monitored = not_monitored;
     v.confusion = run.confusion;
-    v.spc = run
-        .spc
-        .iter()
-        .map(|c| {
-            let k = c.capability.as_ref();
-            SpcRow {
-                name: c.name.clone(),
-                unit: c.unit,
-                n: k.map_or(0, |k| k.n),
-                mean: k.map(|k| k.mean),
-                sigma_within: k.map(|k| k.sigma_within),
-                cp: k.and_then(|k| k.cp),
-                cpk: k.and_then(|k| k.cpk),
-                ppk: k.and_then(|k| k.ppk),
-                band: k.and_then(|k| k.cpk).map_or("–", cpk_band),
-                alarms: c.chart.as_ref().map_or(0, |ch| ch.alarms.len()),
-            }
-        })
+    v.spc = run.spc.iter().map(spc_row).collect();
+    v.pin_spc = by_cpk(&run.pin_spc)
+        .into_iter()
+        .take(PIN_SPC_LISTED)
+        .map(spc_row)
         .collect();
+    if !run.pin_spc.is_empty() {
+        let [c, a, i] = band_counts(&run.pin_spc);
+        v.pin_summary = Some(format!(
+            "{} pin characteristics: {c} capable, {a} adequate, {i} inadequate",
+            run.pin_spc.len()
+        ));
+    }
     v.alarms = run
         .spc
         .iter()
+        .chain(&run.pin_spc)
         .flat_map(|c| {
             c.chart
                 .iter()
@@ -356,6 +399,13 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
         .cycle
         .unwrap_or(usize::MAX)
         .min(v.cycles.len().saturating_sub(1));
+    if let (Some(st), Some(c)) = (&lm.story, v.cycles.get(v.selected)) {
+        v.connector = st
+            .connectors
+            .iter()
+            .find(|k| k.cycle == c.index)
+            .map(connector_line);
+    }
     if let Some(st) = &lm.story {
         v.disagreements = st
             .disagreements()
@@ -365,8 +415,8 @@ pub fn view(s: &Session, ui: &PaneState) -> LineView {
                     c.cycle,
                     c.process.map_or("–", CycleStatus::name),
                     match c.vision {
-                        Some(crate::vision::batch::ItemStatus::Fail) => "fail",
-                        Some(crate::vision::batch::ItemStatus::Pass) => "pass",
+                        Some(ItemStatus::Fail) => "fail",
+                        Some(ItemStatus::Pass) => "pass",
                         _ => "–",
                     },
                     c.why()

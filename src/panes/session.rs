@@ -321,6 +321,7 @@ impl Session {
             &self.logs,
             &self.images,
             book.as_ref(),
+            &self.overlays,
             progress,
         ));
     }

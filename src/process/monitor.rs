@@ -4,7 +4,7 @@
 
 use super::curve::CycleCurve;
 use super::objects::{self, ObjectResult};
-use super::recipe::{Axis, EnvelopeMode, ProcessRecipe, Quantity};
+use super::recipe::{Axis, EnvelopeMode, ProcessRecipe};
 use super::spc::{Capability, ControlChart, capability, control_chart};
 use crate::rig::cycles::CycleSet;
 use rayon::prelude::*;
@@ -76,7 +76,9 @@ impl CycleVerdict {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Characteristic {
     pub name: String,
-    pub quantity: Quantity,
+    /// What is measured: a process value's quantity (`peak_force_n` …) or a
+    /// pin measure (`pin_dx_mm` …); the Q-DAS characteristic number.
+    pub quantity: &'static str,
     pub unit: &'static str,
     pub capability: Option<Capability>,
     pub chart: Option<ControlChart>,
@@ -235,7 +237,7 @@ pub fn spc_of(r: &ProcessRecipe, cycles: &[CycleVerdict]) -> Vec<Characteristic>
                 .collect();
             Characteristic {
                 name: v.name.clone(),
-                quantity: v.quantity,
+                quantity: v.quantity.name(),
                 unit: v.quantity.unit(),
                 capability: capability(&series, r.spc.subgroup, v.min, v.max),
                 chart: control_chart(&series, r.spc.subgroup),

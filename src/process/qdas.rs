@@ -20,11 +20,13 @@
 //! | K0014/i | its part identification (`<log file name>#cycle-<index>`) |
 //!
 //! Values go record by record (one cycle: every characteristic it has a
-//! value for), in log then cycle order, as the run's SPC reads them. Cycles
+//! value for, the process values then its connector's pins), in log then
+//! cycle order, as the run's SPC reads them. Cycles
 //! NOK are exported too (SPC sees the process as it ran); cycles not
 //! evaluated have no values. Text is Latin-1 (`µ` is 0xB5; a character
 //! Latin-1 lacks becomes `?`), lines end in CR LF, numbers use a point.
 
+use super::pin_spc::{ConnectorPins, PinMeasure};
 use super::run::MonitorRun;
 use std::fmt::Write;
 
@@ -49,13 +51,18 @@ pub fn dfq_text(run: &MonitorRun) -> String {
         out.push_str(&s);
         out.push_str("\r\n");
     };
-    let chars = &run.spc;
+    let chars: Vec<&super::monitor::Characteristic> = run.spc.iter().chain(&run.pin_spc).collect();
+    let index: std::collections::HashMap<&str, usize> = chars
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.name.as_str(), i + 1))
+        .collect();
     line(format!("K0100 {}", chars.len()));
     line(format!("K1001/1 {}", one_line(&run.part_number)));
     line("K1002/1 pinsight monitor: insertion process values".to_string());
     for (i, c) in chars.iter().enumerate() {
         let k = i + 1;
-        line(format!("K2001/{k} {}", c.quantity.name()));
+        line(format!("K2001/{k} {}", c.quantity));
         line(format!("K2002/{k} {}", one_line(&c.name)));
         line(format!("K2004/{k} 0"));
         if let Some(cap) = &c.capability {
@@ -74,12 +81,28 @@ pub fn dfq_text(run: &MonitorRun) -> String {
         let file = std::path::Path::new(&l.file)
             .file_name()
             .map_or(l.file.clone(), |f| f.to_string_lossy().into_owned());
+        let pins: std::collections::HashMap<u64, &ConnectorPins> = l
+            .story
+            .iter()
+            .flat_map(|s| &s.pins)
+            .map(|c| (c.cycle, c))
+            .collect();
         for cy in &r.cycles {
-            for (i, c) in chars.iter().enumerate() {
-                let Some(v) = cy.values.get(&c.name).filter(|v| v.is_finite()) else {
-                    continue;
-                };
-                let k = i + 1;
+            let mut record: Vec<(usize, f64)> = chars
+                .iter()
+                .enumerate()
+                .filter_map(|(i, c)| Some((i + 1, *cy.values.get(&c.name)?)))
+                .collect();
+            for p in pins.get(&cy.index).map_or(&[][..], |c| &c.pins) {
+                for m in PinMeasure::ALL {
+                    if let (Some(v), Some(&k)) =
+                        (m.value(p), index.get(m.char_name(p.row, p.col).as_str()))
+                    {
+                        record.push((k, v));
+                    }
+                }
+            }
+            for (k, v) in record.into_iter().filter(|(_, v)| v.is_finite()) {
                 let mut rec = String::new();
                 let _ = write!(rec, "K0001/{k} {v:.DECIMALS$}");
                 line(rec);

@@ -24,7 +24,7 @@ fn spc_table(out: &mut String, title: &str, spc: &[Characteristic]) {
     let _ = writeln!(out, "\n{title}");
     let _ = writeln!(
         out,
-        "  {:<22} {:>5} {:>11} {:>9} {:>9} {:>6} {:>6} {:>6} {:>6}  {:<10} alarms",
+        "  {:<24} {:>5} {:>11} {:>9} {:>9} {:>6} {:>6} {:>6} {:>6}  {:<10} alarms",
         "characteristic",
         "n",
         "mean",
@@ -38,13 +38,13 @@ fn spc_table(out: &mut String, title: &str, spc: &[Characteristic]) {
     );
     for c in spc {
         let Some(k) = &c.capability else {
-            let _ = writeln!(out, "  {:<22} (fewer than two values)", c.name);
+            let _ = writeln!(out, "  {:<24} (fewer than two values)", c.name);
             continue;
         };
         let alarms = c.chart.as_ref().map_or(0, |ch| ch.alarms.len());
         let _ = writeln!(
             out,
-            "  {:<22} {:>5} {:>9.4} {:<2}{:>9.4} {:>9.4} {:>6} {:>6} {:>6} {:>6}  {:<10} {}",
+            "  {:<24} {:>5} {:>9.4} {:<2}{:>9.4} {:>9.4} {:>6} {:>6} {:>6} {:>6}  {:<10} {}",
             c.name,
             k.n,
             k.mean,
@@ -155,7 +155,73 @@ pub fn summary_text(run: &MonitorRun) -> String {
             spc_table(&mut out, &format!("SPC, lot {lot}"), spc);
         }
     }
+    if run.spc_by_speed.len() > 1 {
+        for (speed, spc) in &run.spc_by_speed {
+            spc_table(&mut out, &format!("SPC, {speed}"), spc);
+        }
+    }
+    pin_spc_text(&mut out, run);
     out
+}
+
+/// Characteristics listed by lowest Cpk in the text (the CSV has them all).
+pub const PIN_SPC_LISTED: usize = 10;
+
+/// The pins' capability in Cpk order, lowest first (no Cpk last).
+pub fn by_cpk(spc: &[Characteristic]) -> Vec<&Characteristic> {
+    let mut v: Vec<&Characteristic> = spc.iter().collect();
+    let key = |c: &Characteristic| c.capability.as_ref().and_then(|k| k.cpk);
+    v.sort_by(|a, b| match (key(a), key(b)) {
+        (Some(x), Some(y)) => x.total_cmp(&y),
+        (Some(_), None) => std::cmp::Ordering::Less,
+        (None, Some(_)) => std::cmp::Ordering::Greater,
+        (None, None) => std::cmp::Ordering::Equal,
+    });
+    v
+}
+
+/// How many characteristics fall in each Cpk band (capable, adequate,
+/// inadequate).
+pub fn band_counts(spc: &[Characteristic]) -> [usize; 3] {
+    let mut n = [0; 3];
+    for k in spc.iter().filter_map(|c| c.capability.as_ref()?.cpk) {
+        n[match cpk_band(k) {
+            "capable" => 0,
+            "adequate" => 1,
+            _ => 2,
+        }] += 1;
+    }
+    n
+}
+
+fn pin_spc_text(out: &mut String, run: &MonitorRun) {
+    if run.pin_spc.is_empty() {
+        return;
+    }
+    let connectors: usize = run
+        .logs
+        .iter()
+        .filter_map(|l| l.story.as_ref())
+        .map(|s| s.pins.len())
+        .sum();
+    let [cap, adq, inadq] = band_counts(&run.pin_spc);
+    let _ = writeln!(
+        out,
+        "\nPin positions: {} characteristics over {connectors} photographed connectors \
+         (true position = 2 × radial offset, against 2 × position_mm): \
+         Cpk capable {cap}, adequate {adq}, inadequate {inadq}",
+        run.pin_spc.len()
+    );
+    let worst: Vec<Characteristic> = by_cpk(&run.pin_spc)
+        .into_iter()
+        .take(PIN_SPC_LISTED)
+        .cloned()
+        .collect();
+    spc_table(
+        out,
+        &format!("Pin SPC, the {} lowest Cpk (spc.csv lists all)", worst.len()),
+        &worst,
+    );
 }
 
 fn confusion_text(out: &mut String, c: &Confusion) {
@@ -220,13 +286,18 @@ fn story_text(out: &mut String, st: &StoryReport) {
 /// One row per connector: log, cycle, process status, vision status,
 /// agreement, both sides' reasons.
 pub fn connectors_csv(run: &MonitorRun) -> String {
-    let mut out = String::from("file,cycle,process,vision,agree,process_reasons,vision_reasons\n");
+    let mut out = String::from(
+        "file,cycle,process,vision,agree,process_reasons,vision_reasons,stroke_in_band,force_in_band,stroke_rms_err_mm,stroke_err_bdc_mm\n",
+    );
     for st in run.logs.iter().filter_map(|l| l.story.as_ref()) {
         for c in &st.connectors {
             let status = |s: Option<&str>| s.unwrap_or("").to_string();
+            let b = |f: fn(&super::story::BandFit) -> f64| {
+                c.band.as_ref().map_or(String::new(), |b| f(b).to_string())
+            };
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{}",
                 csv_field(&c.log),
                 c.cycle,
                 status(c.process.map(CycleStatus::name)),
@@ -237,7 +308,11 @@ pub fn connectors_csv(run: &MonitorRun) -> String {
                 })),
                 c.agree.map_or(String::new(), |a| a.to_string()),
                 csv_field(&c.process_reasons.join("; ")),
-                csv_field(&c.vision_reasons.join("; "))
+                csv_field(&c.vision_reasons.join("; ")),
+                b(|b| b.stroke_in_band),
+                b(|b| b.force_in_band),
+                b(|b| b.stroke_rms_err_mm),
+                b(|b| b.stroke_err_bdc_mm)
             );
         }
     }
@@ -290,13 +365,18 @@ pub fn cycles_csv(run: &MonitorRun) -> String {
     out
 }
 
-/// One row per characteristic (all logs, then by lot).
+/// One row per characteristic: the process values over all logs, by lot,
+/// by speed; then the pins' positions the same way.
 pub fn spc_csv(run: &MonitorRun) -> String {
     let mut out = String::from(
         "scope,characteristic,quantity,unit,n,subgroup,mean,sigma_within,sigma_overall,lsl,usl,cp,cpk,pp,ppk,cpk_band,cl,ucl,lcl,alarms\n",
     );
     let rows = std::iter::once(("all", &run.spc))
-        .chain(run.spc_by_lot.iter().map(|(k, v)| (k.as_str(), v)));
+        .chain(run.spc_by_lot.iter().map(|(k, v)| (k.as_str(), v)))
+        .chain(run.spc_by_speed.iter().map(|(k, v)| (k.as_str(), v)))
+        .chain(std::iter::once(("all", &run.pin_spc)))
+        .chain(run.pin_spc_by_lot.iter().map(|(k, v)| (k.as_str(), v)))
+        .chain(run.pin_spc_by_speed.iter().map(|(k, v)| (k.as_str(), v)));
     let o = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
     for (scope, spc) in rows {
         for c in spc {
@@ -307,7 +387,7 @@ pub fn spc_csv(run: &MonitorRun) -> String {
                 "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 csv_field(scope),
                 csv_field(&c.name),
-                c.quantity.name(),
+                c.quantity,
                 c.unit,
                 k.n,
                 k.subgroup,

@@ -8,6 +8,7 @@
 //! listed with both sides' reasons, so an engineer can read why.
 
 use super::monitor::{CycleStatus, CycleVerdict};
+use super::pin_spc::{ConnectorPins, observations};
 use crate::vision::batch::{ItemResult, ItemStatus};
 use crate::vision::result::PinStatus;
 use serde::{Deserialize, Serialize};
@@ -55,12 +56,35 @@ impl Confusion {
     }
 }
 
-/// The model's predicted band around one cycle's stroke: how much of the
-/// measured cycle lies inside the ensemble's band and its RMS residual.
+/// The model's predicted band for one cycle (the overlay's ensemble at the
+/// cycle's speed, see `overlay::compare`): how much of the measured stroke
+/// and force lies inside the band, and the stroke's residuals.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct BandFit {
-    pub in_band_fraction: f64,
-    pub rms_residual_mm: f64,
+    /// Fraction of the cycle's crank-angle grid inside the predicted min–max band.
+    pub stroke_in_band: f64,
+    pub force_in_band: f64,
+    /// RMS of measured − predicted mean stroke over the cycle, mm.
+    pub stroke_rms_err_mm: f64,
+    /// Measured − predicted stroke at bottom dead centre (insertion depth), mm.
+    pub stroke_err_bdc_mm: f64,
+}
+
+impl BandFit {
+    /// The band fit of one cycle of an overlay.
+    pub fn of(r: &crate::overlay::compare::CycleResidual) -> Self {
+        BandFit {
+            stroke_in_band: r.stroke_in_band,
+            force_in_band: r.force_in_band,
+            stroke_rms_err_mm: r.stroke_rms_err_mm,
+            stroke_err_bdc_mm: r.stroke_err_bdc_mm,
+        }
+    }
+
+    /// Every cycle's band fit of an overlay, by cycle index.
+    pub fn of_overlay(r: &crate::overlay::compare::OverlayReport) -> BTreeMap<u64, BandFit> {
+        r.cycles.iter().map(|c| (c.index, BandFit::of(c))).collect()
+    }
 }
 
 /// One connector.
@@ -106,6 +130,10 @@ pub struct StoryReport {
     /// cycle of the log (or no cycle at all).
     pub cycles_without_image: usize,
     pub images_without_cycle: Vec<String>,
+    /// The pins each photograph measured, for the pin-position SPC (not
+    /// written out per connector: the run's `pin_spc` holds them).
+    #[serde(skip)]
+    pub pins: Vec<ConnectorPins>,
 }
 
 impl StoryReport {
@@ -177,12 +205,19 @@ pub fn join(
     }
     let mut confusion = Confusion::default();
     let mut cycles_without_image = 0;
+    let mut pins = Vec::new();
     let connectors = cycles
         .iter()
         .map(|c| {
             let img = by_cycle.get(&c.index).copied();
-            if img.is_none() {
-                cycles_without_image += 1;
+            match img.and_then(|r| r.inspection.as_ref()) {
+                Some(ins) => pins.push(ConnectorPins {
+                    cycle: c.index,
+                    t_start_ns: c.t_start_ns,
+                    pins: observations(ins),
+                }),
+                None if img.is_none() => cycles_without_image += 1,
+                None => {}
             }
             let vision = img.map(|r| r.status);
             let nok = match c.status {
@@ -216,6 +251,7 @@ pub fn join(
         confusion,
         cycles_without_image,
         images_without_cycle,
+        pins,
     }
 }
 

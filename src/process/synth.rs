@@ -55,6 +55,9 @@ pub struct ConnectorTruth {
     pub vision: Option<Verdict>,
     pub debris: bool,
     pub draw: CycleDraw,
+    /// The photograph's pins as painted (height, offset), when images were made.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pins: Vec<crate::vision::truth::TruthPin>,
 }
 
 /// The truth of a faulty line: per connector, and the confusion table
@@ -174,6 +177,7 @@ pub fn faulty_line(cfg: &FaultyLineConfig) -> (SynthLog, LineTruth) {
     for (k, w) in tdcs.windows(2).enumerate() {
         let d = draws[k];
         let debris = debris_rng.uniform() < cfg.debris_rate;
+        let mut pins = Vec::new();
         let vision = if cfg.images {
             let sc = connector_scene(&cfg.recipe, &d, debris, rig.seed ^ ((k as u64 + 1) << 20));
             let (g, t) = sc.render();
@@ -193,6 +197,7 @@ pub fn faulty_line(cfg: &FaultyLineConfig) -> (SynthLog, LineTruth) {
                 publish_time: lt + 8_000_000,
                 data: msg.to_string().into_bytes(),
             });
+            pins = t.pins;
             Some(t.verdict)
         } else {
             None
@@ -206,6 +211,7 @@ pub fn faulty_line(cfg: &FaultyLineConfig) -> (SynthLog, LineTruth) {
             vision,
             debris,
             draw: d,
+            pins,
         });
     }
     log.messages.sort_by_key(|m| m.log_time);

@@ -80,6 +80,7 @@ impl App {
             logs: self.session.logs.clone(),
             images: self.session.images.clone(),
             book,
+            overlays: self.session.overlays.clone(),
         });
     }
 

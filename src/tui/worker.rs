@@ -66,6 +66,8 @@ pub enum JobRequest {
         logs: Vec<crate::engine::entries::LogEntry>,
         images: Vec<ImageEntry>,
         book: Option<RecipeBook>,
+        /// The overlays already run (their bands join the connectors' stories).
+        overlays: std::collections::BTreeMap<usize, crate::engine::overlay::OverlayRun>,
     },
     /// Measured vs predicted for one log.
     Overlay {
@@ -150,11 +152,13 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
             logs,
             images,
             book,
+            overlays,
         } => JobOutput::Monitor(Box::new(crate::engine::process::monitor_session(
             &recipes,
             &logs,
             &images,
             book.as_ref(),
+            &overlays,
             progress,
         ))),
         JobRequest::Load { paths } => {

@@ -28,7 +28,9 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
     }
     let [left, side] =
         Layout::horizontal([Constraint::Percentage(55), Constraint::Percentage(45)]).areas(area);
-    let spc_h = (v.spc.len() as u16 + 3).min(left.height / 2).max(3);
+    let spc_h = ((v.spc.len() + v.pin_spc.len()) as u16 + 3)
+        .min(left.height / 2)
+        .max(3);
     let [chart_area, spc_area] =
         Layout::vertical([Constraint::Min(6), Constraint::Length(spc_h)]).areas(left);
     match &v.chart {
@@ -45,9 +47,10 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
     let rows: Vec<Row> = v
         .spc
         .iter()
+        .chain(&v.pin_spc)
         .map(|s| {
             Row::new(vec![
-                Cell::from(trunc(&s.name, 16)),
+                Cell::from(trunc(&s.name, 20)),
                 Cell::from(s.n.to_string()),
                 Cell::from(opt(s.cpk)),
                 Cell::from(s.band).style(band_style(s.band, theme)),
@@ -87,6 +90,9 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
             theme,
         ));
     }
+    if let Some(c) = &v.connector {
+        lines.push(kv_line("connector", c.clone(), theme));
+    }
     if let Some(c) = &v.confusion {
         lines.push(Line::styled("process × vision (pass/fail)", theme.header()));
         lines.push(Line::raw(format!(
@@ -97,6 +103,9 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
             " NOK {:>5} / {:<5}",
             c.process_nok_vision_pass, c.process_nok_vision_fail
         )));
+    }
+    if let Some(p) = &v.pin_summary {
+        lines.push(Line::styled(p.clone(), theme.muted()));
     }
     for a in v.alarms.iter().take(3) {
         lines.push(Line::styled(a.clone(), theme.warn()));
