@@ -168,7 +168,11 @@ pub fn tick_label(v: f64) -> String {
 /// rounding residue (`-1.39e-17` on an axis from -0.1 to 0.1): snap a tick
 /// closer to zero than a billionth of the axis span to zero.
 fn axis_tick(v: f64, log: bool, span: f64) -> f64 {
-    if !log && v.abs() < 1e-9 * span { 0.0 } else { v }
+    if !log && v.abs() < 1e-9 * span {
+        0.0
+    } else {
+        v
+    }
 }
 
 fn x_span(c: &LineChart) -> f64 {

@@ -1,7 +1,9 @@
 //! `--shard k/n` on the real binary, run as the cluster engines would run
 //! it: N separate processes over the same inputs. Every input lands in
 //! exactly one shard, a log's images stay together, each item's result is
-//! the one a single run gives, and a re-run shard writes the same bytes.
+//! the one a single run gives, a re-run shard writes the same bytes, and
+//! `pinsight merge` of the shards' partials writes the single run's folder
+//! byte for byte.
 
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -114,6 +116,61 @@ fn eight_shards_partition_the_single_run() {
     assert_eq!(failed, all_rep["failed"].as_u64().unwrap());
     assert_eq!(errors, all_rep["errors"].as_u64().unwrap());
 
+    // The shards' partial results merged (as `pinsight merge` would be run
+    // after the job) are the single run's folder, byte for byte: the same
+    // files, the same JSON numbers, Markdown, CSV and charts.
+    let merged = tmp.path().join("merged");
+    let mut m = Command::new(env!("CARGO_BIN_EXE_pinsight"));
+    m.arg("merge");
+    // Any order of the partials; files or folders.
+    for k in (0..n).rev() {
+        let d = tmp.path().join(format!("shard-{k}"));
+        m.arg(if k % 2 == 0 {
+            d.join("partial.json")
+        } else {
+            d
+        });
+    }
+    let o = m.arg("--out").arg(&merged).output().unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let files = |d: &Path| -> BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (w, mg) = (files(&whole), files(&merged));
+    assert_eq!(
+        w.keys().collect::<Vec<_>>(),
+        mg.keys().collect::<Vec<_>>(),
+        "the merged folder holds the single run's files"
+    );
+    for (name, bytes) in &w {
+        assert!(
+            bytes == &mg[name],
+            "{name} differs between the single run and the merge"
+        );
+    }
+    // A merge that lacks a shard, or mixes two jobs, is refused.
+    let o = Command::new(env!("CARGO_BIN_EXE_pinsight"))
+        .args(["merge"])
+        .args((0..n - 1).map(|k| tmp.path().join(format!("shard-{k}"))))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("7/8 missing"));
+
     // A failed shard re-run gives the same bytes (Slurm environment this
     // time: task 12 of an array 10-17 is shard 2/8).
     let again = tmp.path().join("again");
@@ -126,7 +183,13 @@ fn eight_shards_partition_the_single_run() {
             ("SLURM_ARRAY_TASK_COUNT", "8"),
         ],
     );
-    for f in ["yield.json", "items.csv", "pins.csv", "yield.md"] {
+    for f in [
+        "yield.json",
+        "items.csv",
+        "pins.csv",
+        "yield.md",
+        "partial.json",
+    ] {
         assert_eq!(
             std::fs::read(tmp.path().join("shard-2").join(f)).unwrap(),
             std::fs::read(again.join(f)).unwrap(),

@@ -338,11 +338,14 @@ fn pin_positions_spc_band_charts_and_qdas_on_a_faulty_line() {
         let k = &c["capability"];
         assert_eq!(k["n"].as_u64().unwrap() as usize, hs.len(), "{name}");
         let mean = hs.iter().sum::<f64>() / hs.len() as f64;
-        let sd = (hs.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / (hs.len() - 1) as f64)
-            .sqrt();
+        let sd =
+            (hs.iter().map(|h| (h - mean).powi(2)).sum::<f64>() / (hs.len() - 1) as f64).sqrt();
         let got_mean = k["mean"].as_f64().unwrap();
         let got_sd = k["sigma_overall"].as_f64().unwrap();
-        assert!((got_mean - mean).abs() < 0.01, "{name}: {got_mean} vs {mean}");
+        assert!(
+            (got_mean - mean).abs() < 0.01,
+            "{name}: {got_mean} vs {mean}"
+        );
         assert!((got_sd - sd).abs() < 0.01, "{name}: σ {got_sd} vs {sd}");
         assert_eq!(c["quantity"], "pin_height_mm");
     }
@@ -369,7 +372,11 @@ fn pin_positions_spc_band_charts_and_qdas_on_a_faulty_line() {
         assert_eq!(b["stroke_err_bdc_mm"], want["stroke_err_bdc_mm"]);
         banded += 1;
     }
-    assert!(banded + 2 >= connectors.len(), "{banded} of {}", connectors.len());
+    assert!(
+        banded + 2 >= connectors.len(),
+        "{banded} of {}",
+        connectors.len()
+    );
 
     // Charts: one per characteristic with a chart.
     let process_spc = run["spc"].as_array().unwrap();
@@ -396,7 +403,11 @@ fn pin_positions_spc_band_charts_and_qdas_on_a_faulty_line() {
         .arg(&dfq)
         .output()
         .expect("python3 with aqdefreader");
-    assert!(py.status.success(), "{}", String::from_utf8_lossy(&py.stderr));
+    assert!(
+        py.status.success(),
+        "{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
     let got: Value = serde_json::from_slice(&py.stdout).unwrap();
     let chars = got["parts"][0]["characteristics"].as_array().unwrap();
     assert_eq!(chars.len(), process_spc.len() + pin_spc.len());

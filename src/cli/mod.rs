@@ -9,6 +9,7 @@ pub mod calibrate;
 pub mod common;
 pub mod inspect;
 pub mod log;
+pub mod merge;
 pub mod methods;
 pub mod monitor;
 pub mod overlay;
@@ -50,6 +51,8 @@ pub enum Command {
     Inspect(inspect::Args),
     /// Batch yield report over image folders or rig logs.
     Yield(yield_report::Args),
+    /// Merge the partial results of a sharded yield into the single run's report.
+    Merge(merge::Args),
     /// The methods lab: work–precision, stability, fidelity, vision localisers.
     Methods(methods::Args),
     /// Open the terminal workstation on the given files.
@@ -90,6 +93,7 @@ pub fn main() -> ExitCode {
         Some(Command::Calibrate(a)) => calibrate::run(a),
         Some(Command::Inspect(a)) => inspect::run(a),
         Some(Command::Yield(a)) => yield_report::run(a),
+        Some(Command::Merge(a)) => merge::run(a),
         Some(Command::Methods(a)) => methods::run(a),
         Some(Command::Tui(a)) => tui::run(a),
         Some(Command::Render(a)) => render::run(a),

@@ -9,14 +9,19 @@
 //! otherwise it prints the Markdown report. Images that cannot be read or
 //! analysed are `error`: listed, counted beside the yield, never dropped.
 //!
+//! With `--shard k/n` and `--out`, the shard also writes `partial.json`
+//! for `pinsight merge` (`plant::merge`).
+//!
 //! Exit status: 0 done, 3 done but some images were errors, 2 the command
 //! itself failed.
 
 use crate::cli::common::{outln, outp};
 use crate::engine::vision::{YieldInput, run_yield_inputs};
+use crate::plant::merge::{self, YieldPartial};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::{self, ItemStatus, RecipeBook};
 use crate::vision::report::{self, GroupBy};
+use crate::vision::yield_acc::YieldAcc;
 use crate::vision::{InspectOptions, Localiser};
 use anyhow::Context;
 use std::path::PathBuf;
@@ -83,7 +88,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let (items, errors) = batch::collect_items(&args.inputs);
     let shard =
         crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
-    let (items, errors) = crate::plant::shard::split_collected(shard, items, errors);
+    let part = crate::plant::shard::split_collected_part(shard, items, errors);
+    let (items, errors, orders) = (part.items, part.errors, part.orders);
     if !shard.is_whole() {
         eprintln!("shard {shard}: {} input(s)", items.len() + errors.len());
     }
@@ -119,8 +125,36 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     );
     match &args.out {
         Some(dir) => {
-            let files =
-                report::write_all(dir, &rep, &results, &title).map_err(anyhow::Error::msg)?;
+            // Each item's lines with its place in the whole batch; a shard
+            // adds its partial result for `pinsight merge`.
+            let records = results
+                .iter()
+                .zip(&orders)
+                .map(|(r, &o)| report::ItemRecord::of(o, r))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(anyhow::Error::msg)?;
+            let mut extra = Vec::new();
+            if !shard.is_whole() {
+                let mut aggregate = YieldAcc::new(args.by);
+                for (r, &o) in results.iter().zip(&orders) {
+                    aggregate.add(o, r);
+                }
+                let partial = YieldPartial {
+                    format: merge::FORMAT.into(),
+                    shard,
+                    units: part.units,
+                    digest: part.digest.clone(),
+                    title: title.clone(),
+                    aggregate,
+                    items: records.clone(),
+                };
+                extra.push((
+                    merge::PARTIAL_FILE.to_string(),
+                    serde_json::to_vec(&partial)?,
+                ));
+            }
+            let files = report::write_records(dir, &rep, &records, &title, &extra)
+                .map_err(anyhow::Error::msg)?;
             let y = rep
                 .yield_frac
                 .map(|y| {

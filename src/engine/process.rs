@@ -9,11 +9,11 @@
 //! asked.
 
 use super::entries::{ImageEntry, LogEntry};
+use super::overlay::OverlayRun;
 use super::vision::{YieldInput, run_yield_inputs, yield_item};
 use crate::model::params::Params;
-use crate::process::run::{LogMonitor, MonitorRun};
-use super::overlay::OverlayRun;
 use crate::overlay::compare::OverlayOptions;
+use crate::process::run::{LogMonitor, MonitorRun};
 use crate::process::story::{BandFit, join};
 use crate::process::{ProcessRecipe, learn, monitor};
 use crate::progress::Progress;
@@ -117,7 +117,8 @@ pub fn model_bands(
     cs: &CycleSet,
     progress: &Progress,
 ) -> Result<BTreeMap<u64, BandFit>, String> {
-    let rep = super::overlay::overlay_job(log, cs, None, &[], &OverlayOptions::default(), progress)?;
+    let rep =
+        super::overlay::overlay_job(log, cs, None, &[], &OverlayOptions::default(), progress)?;
     Ok(BandFit::of_overlay(&rep))
 }
 

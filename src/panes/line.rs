@@ -12,13 +12,13 @@ use super::PaneState;
 use super::chart::{ChartView, SeriesKind, SeriesView};
 use super::session::Session;
 use crate::process::monitor::{Characteristic, CycleStatus, CycleVerdict, MonitorReport};
-use crate::process::report::{PIN_SPC_LISTED, band_counts, by_cpk};
 use crate::process::recipe::{Axis, ProcessRecipe};
+use crate::process::report::{PIN_SPC_LISTED, band_counts, by_cpk};
 use crate::process::run::{LogMonitor, MonitorRun};
 use crate::process::spc::cpk_band;
 use crate::process::story::{Confusion, ConnectorStory};
-use crate::vision::batch::ItemStatus;
 use crate::rig::cycles::CycleSet;
+use crate::vision::batch::ItemStatus;
 use serde::Serialize;
 
 /// UI state of the Line pane: the selected cycle (row of the cycle list;

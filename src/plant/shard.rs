@@ -27,7 +27,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::fmt;
 
 /// Shard `k` of `n` (0 ≤ k < n).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct Shard {
     pub k: u32,
     pub n: u32,
@@ -155,16 +155,48 @@ pub fn split_collected(
     items: Vec<Item>,
     errors: Vec<ItemResult>,
 ) -> (Vec<Item>, Vec<ItemResult>) {
-    if shard.is_whole() {
-        return (items, errors);
-    }
-    let units: Vec<&str> = items
+    let p = split_collected_part(shard, items, errors);
+    (p.items, p.errors)
+}
+
+/// A shard's part of a collected batch, and what a merge must know of the
+/// whole batch.
+#[derive(Debug)]
+pub struct ShardPart {
+    pub items: Vec<Item>,
+    pub errors: Vec<ItemResult>,
+    /// Where each kept input stands in the whole batch's order — the order
+    /// a single run inspects them in: the inputs that failed first, then
+    /// the images (`errors` first, then `items`).
+    pub orders: Vec<u64>,
+    /// Distinct units of the whole batch.
+    pub units: u64,
+    /// SHA-256 (hex) of the whole batch's sorted distinct unit names, one
+    /// per line: the identity of the input list every shard of a job saw.
+    pub digest: String,
+}
+
+/// [`split_collected`] with the positions and the batch's identity.
+pub fn split_collected_part(shard: Shard, items: Vec<Item>, errors: Vec<ItemResult>) -> ShardPart {
+    use sha2::Digest;
+    let units: Vec<String> = errors
         .iter()
-        .map(unit_of_item)
-        .chain(errors.iter().map(unit_of_result))
+        .map(unit_of_result)
+        .chain(items.iter().map(unit_of_item))
+        .map(str::to_string)
         .collect();
+    let distinct: std::collections::BTreeSet<&str> = units.iter().map(String::as_str).collect();
+    let mut h = sha2::Sha256::new();
+    for u in &distinct {
+        h.update(u.as_bytes());
+        h.update(b"\n");
+    }
+    let digest: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
     let keep = shard.select(&units);
-    let (ki, ke) = keep.split_at(items.len());
+    let (ke, ki) = keep.split_at(errors.len());
+    let e0 = errors.len();
+    let mut orders: Vec<u64> = (0..e0).filter(|&i| ke[i]).map(|i| i as u64).collect();
+    orders.extend((0..items.len()).filter(|&i| ki[i]).map(|i| (e0 + i) as u64));
     let items = items
         .into_iter()
         .zip(ki)
@@ -175,7 +207,13 @@ pub fn split_collected(
         .zip(ke)
         .filter_map(|(e, &k)| k.then_some(e))
         .collect();
-    (items, errors)
+    ShardPart {
+        items,
+        errors,
+        orders,
+        units: distinct.len() as u64,
+        digest,
+    }
 }
 
 impl fmt::Display for Shard {

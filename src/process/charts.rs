@@ -41,7 +41,12 @@ pub fn chart_panels(c: &Characteristic) -> Option<Vec<Panel>> {
         Series::line(format!("{loc} ({} per point)", ch.subgroup), pts.clone())
             .with_style(SeriesStyle::LinePoints)
             .with_color(0),
-        hline(&format!("CL {}", crate::plot::tick_label(ch.cl)), ch.cl, n, 2),
+        hline(
+            &format!("CL {}", crate::plot::tick_label(ch.cl)),
+            ch.cl,
+            n,
+            2,
+        ),
         hline("UCL", ch.ucl, n, 3),
         hline("LCL", ch.lcl, n, 3),
     ];
@@ -160,7 +165,10 @@ mod tests {
         let p = chart_panels(&c).unwrap();
         let Panel::Line(loc) = &p[0] else { panic!() };
         let labels: Vec<&str> = loc.series.iter().map(|s| s.label.as_str()).collect();
-        assert!(labels.contains(&"USL") && labels.contains(&"LSL"), "{labels:?}");
+        assert!(
+            labels.contains(&"USL") && labels.contains(&"LSL"),
+            "{labels:?}"
+        );
         let alarm = loc.series.last().unwrap();
         assert!(alarm.label.starts_with("run rule 1"), "{labels:?}");
         assert!(alarm.points.contains(&(8.0, 3.0)));

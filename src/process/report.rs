@@ -219,7 +219,10 @@ fn pin_spc_text(out: &mut String, run: &MonitorRun) {
         .collect();
     spc_table(
         out,
-        &format!("Pin SPC, the {} lowest Cpk (spc.csv lists all)", worst.len()),
+        &format!(
+            "Pin SPC, the {} lowest Cpk (spc.csv lists all)",
+            worst.len()
+        ),
         &worst,
     );
 }

@@ -44,7 +44,9 @@ pub enum VisionError {
 }
 
 /// Short machine-readable class of an error (CSV / JSON `error_kind`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, serde::Deserialize, PartialOrd, Ord,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum ErrorKind {
     Io,

@@ -55,6 +55,7 @@ pub mod synth_envelope;
 pub mod tip_levels;
 pub mod top;
 pub mod truth;
+pub mod yield_acc;
 
 pub use error::{ErrorKind, VisionError};
 pub use gray::{Gray, GrayData, ImageInfo, Plane};

@@ -11,10 +11,8 @@
 //!   (extras are not pins: they are counted in the Pareto, not in DPPM).
 
 use super::batch::{ItemResult, ItemStatus};
-use super::result::PinStatus;
 use crate::plot::{Band, BarChart, LineChart, Panel, Series, SeriesStyle};
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -89,7 +87,7 @@ pub struct PositionStats {
 }
 
 /// An item that could not be inspected.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ErrorRow {
     pub name: String,
     pub kind: super::error::ErrorKind,
@@ -125,7 +123,7 @@ pub struct YieldReport {
     pub error_list: Vec<ErrorRow>,
 }
 
-fn fmt_num(v: f64) -> String {
+pub(crate) fn fmt_num(v: f64) -> String {
     if v.fract() == 0.0 && v.abs() < 1e12 {
         format!("{v:.0}")
     } else {
@@ -133,7 +131,7 @@ fn fmt_num(v: f64) -> String {
     }
 }
 
-fn group_key(r: &ItemResult, by: GroupBy) -> (String, Option<f64>) {
+pub(crate) fn group_key(r: &ItemResult, by: GroupBy) -> (String, Option<f64>) {
     let m = &r.meta;
     match by {
         GroupBy::Lot => (m.lot.clone().unwrap_or_else(|| "(no lot)".into()), None),
@@ -149,194 +147,12 @@ fn group_key(r: &ItemResult, by: GroupBy) -> (String, Option<f64>) {
     }
 }
 
-fn groups_of(
-    results: &[ItemResult],
-    key: impl Fn(&ItemResult) -> Option<(String, Option<f64>)>,
-) -> Vec<GroupYield> {
-    let mut map: BTreeMap<String, GroupYield> = BTreeMap::new();
-    for r in results {
-        let Some((k, v)) = key(r) else { continue };
-        let g = map.entry(k.clone()).or_insert(GroupYield {
-            key: k,
-            value: v,
-            inspected: 0,
-            passed: 0,
-            errors: 0,
-            yield_frac: None,
-            ci95: (0.0, 1.0),
-        });
-        match r.status {
-            ItemStatus::Pass => {
-                g.inspected += 1;
-                g.passed += 1;
-            }
-            ItemStatus::Fail => g.inspected += 1,
-            ItemStatus::Error => g.errors += 1,
-        }
-    }
-    let mut v: Vec<GroupYield> = map
-        .into_values()
-        .map(|mut g| {
-            g.yield_frac = (g.inspected > 0).then(|| g.passed as f64 / g.inspected as f64);
-            g.ci95 = wilson(g.passed, g.inspected, Z95);
-            g
-        })
-        .collect();
-    if v.iter().all(|g| g.value.is_some()) {
-        v.sort_by(|a, b| a.value.unwrap_or(0.0).total_cmp(&b.value.unwrap_or(0.0)));
-    }
-    v
-}
-
 impl YieldReport {
-    /// Computes the report from the batch results.
+    /// Computes the report from the batch results (through their mergeable
+    /// aggregate, [`super::yield_acc::YieldAcc`], so that a report merged
+    /// from shards is this very report).
     pub fn build(results: &[ItemResult], by: GroupBy) -> YieldReport {
-        let (mut passed, mut failed, mut errors) = (0u64, 0u64, 0u64);
-        let mut pins = 0u64;
-        let mut defective = 0u64;
-        let mut kinds: BTreeMap<PinStatus, u64> = BTreeMap::new();
-        let mut extras = 0u64;
-        let mut with_extras = 0u64;
-        let mut pos: BTreeMap<(String, u32, u32), (PositionStats, Vec<f64>)> = BTreeMap::new();
-        let mut error_list = Vec::new();
-        for r in results {
-            match r.status {
-                ItemStatus::Pass => passed += 1,
-                ItemStatus::Fail => failed += 1,
-                ItemStatus::Error => errors += 1,
-            }
-            if let Some(e) = &r.error {
-                error_list.push(ErrorRow {
-                    name: r.name.clone(),
-                    kind: e.kind,
-                    message: e.message.clone(),
-                });
-            }
-            let Some(ins) = &r.inspection else { continue };
-            extras += ins.extras.len() as u64;
-            if !ins.extras.is_empty() {
-                with_extras += 1;
-            }
-            for p in &ins.pins {
-                pins += 1;
-                let entry = pos
-                    .entry((ins.part_number.clone(), p.row, p.col))
-                    .or_insert_with(|| {
-                        (
-                            PositionStats {
-                                part_number: ins.part_number.clone(),
-                                row: p.row,
-                                col: p.col,
-                                inspected: 0,
-                                defects: 0,
-                                rate: 0.0,
-                                missing: 0,
-                                damaged: 0,
-                                bent: 0,
-                                short: 0,
-                                high: 0,
-                                mean_offset_mm: None,
-                                max_offset_mm: None,
-                            },
-                            Vec::new(),
-                        )
-                    });
-                entry.0.inspected += 1;
-                if let Some(o) = p.offset_mm {
-                    entry.1.push(o);
-                }
-                if p.status != PinStatus::Ok {
-                    defective += 1;
-                    *kinds.entry(p.status).or_default() += 1;
-                    entry.0.defects += 1;
-                    match p.status {
-                        PinStatus::Missing => entry.0.missing += 1,
-                        PinStatus::Damaged => entry.0.damaged += 1,
-                        PinStatus::Bent => entry.0.bent += 1,
-                        PinStatus::Short => entry.0.short += 1,
-                        PinStatus::High => entry.0.high += 1,
-                        PinStatus::Ok => {}
-                    }
-                }
-            }
-        }
-        let inspected = passed + failed;
-        // Pareto over pin defect kinds and extras.
-        let mut pareto: Vec<(String, u64)> = kinds
-            .iter()
-            .map(|(k, v)| (k.as_str().to_string(), *v))
-            .collect();
-        if extras > 0 {
-            pareto.push(("extra".into(), extras));
-        }
-        pareto.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-        let total: u64 = pareto.iter().map(|p| p.1).sum();
-        let mut cum = 0u64;
-        let pareto = pareto
-            .into_iter()
-            .map(|(kind, count)| {
-                cum += count;
-                ParetoRow {
-                    kind,
-                    count,
-                    share: count as f64 / total.max(1) as f64,
-                    cumulative: cum as f64 / total.max(1) as f64,
-                }
-            })
-            .collect();
-        let mut worst: Vec<PositionStats> = pos
-            .into_values()
-            .map(|(mut s, offs)| {
-                s.rate = s.defects as f64 / s.inspected.max(1) as f64;
-                if !offs.is_empty() {
-                    s.mean_offset_mm = Some(offs.iter().sum::<f64>() / offs.len() as f64);
-                    s.max_offset_mm = offs.iter().cloned().reduce(f64::max);
-                }
-                s
-            })
-            .collect();
-        worst.sort_by(|a, b| {
-            b.defects
-                .cmp(&a.defects)
-                .then(b.rate.total_cmp(&a.rate))
-                .then(
-                    b.mean_offset_mm
-                        .unwrap_or(0.0)
-                        .total_cmp(&a.mean_offset_mm.unwrap_or(0.0)),
-                )
-        });
-        let dp = wilson(defective, pins, Z95);
-        YieldReport {
-            items: results.len() as u64,
-            inspected,
-            passed,
-            failed,
-            errors,
-            yield_frac: (inspected > 0).then(|| passed as f64 / inspected as f64),
-            ci95: wilson(passed, inspected, Z95),
-            ci_method: "Wilson score interval, 95 %".into(),
-            pins_inspected: pins,
-            defective_pins: defective,
-            dppm: (pins > 0).then(|| defective as f64 / pins as f64 * 1e6),
-            dppm_ci95: (dp.0 * 1e6, dp.1 * 1e6),
-            extras,
-            connectors_with_extras: with_extras,
-            pareto,
-            group_by: by,
-            groups: groups_of(results, |r| Some(group_key(r, by))),
-            by_speed: groups_of(results, |r| {
-                r.meta
-                    .motor_rpm
-                    .map(|v| (format!("{} rpm", fmt_num(v)), Some(v)))
-            }),
-            by_clearance: groups_of(results, |r| {
-                r.meta
-                    .clearance_mm
-                    .map(|v| (format!("{} mm", fmt_num(v)), Some(v)))
-            }),
-            worst_pins: worst,
-            error_list,
-        }
+        super::yield_acc::YieldAcc::of(results, by).report()
     }
 
     /// Chart panels: Pareto, yield by group, worst positions, and yield
@@ -610,12 +426,22 @@ fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
     v.map(|v| v.to_string()).unwrap_or_default()
 }
 
+const ITEMS_CSV_HEADER: &str = "name,status,part_number,lot,rig_id,motor_rpm,clearance_mm,cycle,ok,missing,damaged,bent,short,high,extras,error_kind,error\n";
+const PINS_CSV_HEADER: &str = "name,row,col,status,x_px,y_px,nominal_x_px,nominal_y_px,dx_mm,dy_mm,offset_mm,area_ratio,height_mm\n";
+
 /// One row per item.
 pub fn items_csv(results: &[ItemResult]) -> String {
-    let mut s = String::from(
-        "name,status,part_number,lot,rig_id,motor_rpm,clearance_mm,cycle,ok,missing,damaged,bent,short,high,extras,error_kind,error\n",
-    );
+    let mut s = String::from(ITEMS_CSV_HEADER);
     for r in results {
+        s.push_str(&items_csv_row(r));
+    }
+    s
+}
+
+/// An item's row of `items.csv` (with its line end).
+pub fn items_csv_row(r: &ItemResult) -> String {
+    let mut s = String::new();
+    {
         let m = &r.meta;
         let c = r.inspection.as_ref().map(|i| &i.counts);
         let _ = writeln!(
@@ -649,12 +475,20 @@ pub fn items_csv(results: &[ItemResult]) -> String {
 
 /// One row per inspected pin.
 pub fn pins_csv(results: &[ItemResult]) -> String {
-    let mut s = String::from(
-        "name,row,col,status,x_px,y_px,nominal_x_px,nominal_y_px,dx_mm,dy_mm,offset_mm,area_ratio,height_mm\n",
-    );
-    let f = |v: Option<f64>, d: usize| v.map(|v| format!("{v:.d$}")).unwrap_or_default();
+    let mut s = String::from(PINS_CSV_HEADER);
     for r in results {
-        let Some(ins) = &r.inspection else { continue };
+        s.push_str(&pins_csv_rows(r));
+    }
+    s
+}
+
+/// An item's rows of `pins.csv` (with their line ends; none without an
+/// inspection).
+pub fn pins_csv_rows(r: &ItemResult) -> String {
+    let mut s = String::new();
+    let f = |v: Option<f64>, d: usize| v.map(|v| format!("{v:.d$}")).unwrap_or_default();
+    {
+        let Some(ins) = &r.inspection else { return s };
         for p in &ins.pins {
             let _ = writeln!(
                 s,
@@ -678,6 +512,49 @@ pub fn pins_csv(results: &[ItemResult]) -> String {
     s
 }
 
+/// One item's part of the per-item outputs (its element of `yield.json`'s
+/// `items`, its row of `items.csv`, its rows of `pins.csv`) and where it
+/// stands in the batch: what a shard hands to `pinsight merge` besides the
+/// aggregate, so the merged files are the single run's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ItemRecord {
+    pub order: u64,
+    /// The item as compact JSON.
+    pub json: String,
+    pub csv: String,
+    pub pins_csv: String,
+}
+
+impl ItemRecord {
+    pub fn of(order: u64, r: &ItemResult) -> Result<Self, String> {
+        Ok(ItemRecord {
+            order,
+            json: serde_json::to_string(r).map_err(|e| e.to_string())?,
+            csv: items_csv_row(r),
+            pins_csv: pins_csv_rows(r),
+        })
+    }
+}
+
+/// `yield.json`: the report (indented) and the items, one compact JSON
+/// object per line, in batch order.
+pub fn yield_json(report: &YieldReport, items: &[ItemRecord]) -> Result<String, String> {
+    let rep = serde_json::to_string_pretty(report).map_err(|e| e.to_string())?;
+    let mut s = String::from("{\n  \"report\": ");
+    s.push_str(&rep.replace('\n', "\n  "));
+    s.push_str(",\n  \"items\": [");
+    for (i, it) in items.iter().enumerate() {
+        s.push_str(if i == 0 { "\n    " } else { ",\n    " });
+        s.push_str(&it.json);
+    }
+    s.push_str(if items.is_empty() {
+        "]\n}\n"
+    } else {
+        "\n  ]\n}\n"
+    });
+    Ok(s)
+}
+
 /// Writes `yield.json`, `items.csv`, `pins.csv`, the charts and `yield.md`
 /// into `dir` (created if needed); returns the files written.
 pub fn write_all(
@@ -686,47 +563,58 @@ pub fn write_all(
     results: &[ItemResult],
     title: &str,
 ) -> Result<Vec<String>, String> {
+    let records = results
+        .iter()
+        .enumerate()
+        .map(|(i, r)| ItemRecord::of(i as u64, r))
+        .collect::<Result<Vec<_>, _>>()?;
+    write_records(dir, report, &records, title, &[])
+}
+
+/// [`write_all`] from the items' records (in batch order), with `extra`
+/// files (name, bytes) beside the report: the one writer of a single run,
+/// a shard and a merge.
+pub fn write_records(
+    dir: &Path,
+    report: &YieldReport,
+    records: &[ItemRecord],
+    title: &str,
+    extra: &[(String, Vec<u8>)],
+) -> Result<Vec<String>, String> {
     // Every file is staged first; the old report is replaced only when all
     // are complete (crate::output).
     let mut out = crate::output::Report::new_in(dir).map_err(|e| e.to_string())?;
-    let mut written = Vec::new();
-    let mut put = |name: &str, data: &[u8], _: &mut Vec<String>| -> Result<(), String> {
+    let mut put = |name: &str, data: &[u8]| -> Result<(), String> {
         out.add(name, data).map_err(|e| e.to_string())?;
         Ok(())
     };
-    #[derive(Serialize)]
-    struct Out<'a> {
-        report: &'a YieldReport,
-        items: &'a [ItemResult],
+    put("yield.json", yield_json(report, records)?.as_bytes())?;
+    let mut csv = String::from(ITEMS_CSV_HEADER);
+    let mut pins = String::from(PINS_CSV_HEADER);
+    for r in records {
+        csv.push_str(&r.csv);
+        pins.push_str(&r.pins_csv);
     }
-    let json = serde_json::to_vec_pretty(&Out {
-        report,
-        items: results,
-    })
-    .map_err(|e| e.to_string())?;
-    put("yield.json", &json, &mut written)?;
-    put("items.csv", items_csv(results).as_bytes(), &mut written)?;
-    put("pins.csv", pins_csv(results).as_bytes(), &mut written)?;
+    put("items.csv", csv.as_bytes())?;
+    put("pins.csv", pins.as_bytes())?;
     let mut charts = Vec::new();
     for (name, panel) in report.panels() {
         let file = format!("{name}.png");
         let png = crate::plot::render_png(std::slice::from_ref(&panel), 1, 900, 500)
             .map_err(|e| e.to_string())?;
-        put(&file, &png, &mut written)?;
+        put(&file, &png)?;
         charts.push((name.replace('_', " "), file));
     }
-    put(
-        "yield.md",
-        report.markdown(title, &charts).as_bytes(),
-        &mut written,
-    )?;
-    written.extend(
-        out.commit()
-            .map_err(|e| e.to_string())?
-            .iter()
-            .map(|p| p.display().to_string()),
-    );
-    Ok(written)
+    put("yield.md", report.markdown(title, &charts).as_bytes())?;
+    for (name, bytes) in extra {
+        put(name, bytes)?;
+    }
+    Ok(out
+        .commit()
+        .map_err(|e| e.to_string())?
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect())
 }
 
 #[cfg(test)]
