@@ -410,3 +410,30 @@ fn verdict(
         ),
     }
 }
+
+/// The trend of the session's logs (the Trend pane, `render trend`, batch
+/// `run trend`): the logs' files with the default options, no cache, the
+/// limit derived from the first side-view recipe's `height_tol_mm` when one
+/// is loaded — what `pinsight trend LOGS -r SIDE_RECIPE --json` prints.
+pub fn trend_session(
+    logs: &[super::entries::LogEntry],
+    recipes: &[super::entries::RecipeEntry],
+    progress: &Progress,
+) -> Result<TrendReport, String> {
+    if logs.is_empty() {
+        return Err("no rig log loaded".into());
+    }
+    let inputs: Vec<PathBuf> = logs.iter().map(|l| PathBuf::from(&l.path)).collect();
+    let opts = TrendOptions {
+        tolerance_mm: recipes
+            .iter()
+            .find_map(|r| r.recipe.tolerance.height_tol_mm),
+        ..TrendOptions::default()
+    };
+    Ok(run_trend(
+        &inputs,
+        &opts,
+        &mut TrendCache::default(),
+        progress,
+    ))
+}

@@ -32,6 +32,7 @@ pub enum JobKind {
     Yield,
     Overlay,
     Monitor,
+    Trend,
 }
 
 /// A unit of background work.
@@ -67,6 +68,11 @@ pub enum JobRequest {
         images: Vec<ImageEntry>,
         book: Option<RecipeBook>,
     },
+    /// The wear trend over the session's logs (the Trend pane).
+    Trend {
+        logs: Vec<crate::engine::entries::LogEntry>,
+        recipes: Vec<crate::engine::entries::RecipeEntry>,
+    },
     /// Measured vs predicted for one log.
     Overlay {
         index: usize,
@@ -86,6 +92,7 @@ impl JobRequest {
             JobRequest::Yield { .. } => JobKind::Yield,
             JobRequest::Overlay { .. } => JobKind::Overlay,
             JobRequest::Monitor { .. } => JobKind::Monitor,
+            JobRequest::Trend { .. } => JobKind::Trend,
         }
     }
 
@@ -98,6 +105,7 @@ impl JobRequest {
             JobRequest::Yield { images, .. } => format!("yield over {} images", images.len()),
             JobRequest::Overlay { log, .. } => format!("overlay of {}", log.file),
             JobRequest::Monitor { logs, .. } => format!("monitor over {} log(s)", logs.len()),
+            JobRequest::Trend { logs, .. } => format!("trend over {} log(s)", logs.len()),
             JobRequest::Load { paths } => match paths.as_slice() {
                 [one] => format!("opening {}", one.display()),
                 many => format!("opening {} paths", many.len()),
@@ -117,6 +125,7 @@ pub enum JobOutput {
     Yield(Box<YieldRun>),
     Overlay(Box<OverlayRun>),
     Monitor(Box<Result<crate::process::run::MonitorRun, String>>),
+    Trend(Box<Result<crate::wear::TrendReport, String>>),
     /// The job panicked (a defect): the message, for the status line.
     Failed(String),
 }
@@ -157,6 +166,9 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
             book.as_ref(),
             progress,
         ))),
+        JobRequest::Trend { logs, recipes } => JobOutput::Trend(Box::new(
+            crate::engine::trend::trend_session(&logs, &recipes, progress),
+        )),
         JobRequest::Load { paths } => {
             let mut out = Vec::new();
             for p in paths {
