@@ -437,3 +437,96 @@ pub fn trend_session(
         progress,
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Params;
+
+    fn point(i: usize, cycles: Option<f64>, c: f64, u95: f64) -> HistoryPoint {
+        HistoryPoint {
+            file: format!("log-{i}.mcap"),
+            sha256: format!("{i:064}"),
+            rig: "head-B".into(),
+            start_ns: Some(1_790_000_000_000_000_000 + i as i64 * 86_400_000_000_000),
+            start_utc: String::new(),
+            head_cycles: cycles,
+            cycles: 12,
+            motor_rpm: 1200.0,
+            clearance_mm: c,
+            sigma_mm: u95 / 2.0,
+            u95_mm: u95,
+            params: Params::paper(),
+        }
+    }
+
+    fn opts() -> TrendOptions {
+        TrendOptions {
+            limit_mm: Some(0.8),
+            ..TrendOptions::default()
+        }
+    }
+
+    #[test]
+    fn a_head_that_does_not_wear_says_so_and_gives_no_forecast() {
+        // Clearances scattered about 0.2 mm with no trend (values chosen by hand).
+        let cs = [0.21, 0.19, 0.205, 0.195, 0.2];
+        let pts = (0..5)
+            .map(|i| point(i, Some(i as f64 * 1e5), cs[i], 0.02))
+            .collect();
+        let h = head_trend("head-B".into(), pts, &opts());
+        let f = h.fit.as_ref().unwrap();
+        assert!(f.slope_lo95 < 0.0 && f.slope_hi95 > 0.0, "{f:?}");
+        assert!(
+            h.verdict.starts_with("no wear the data can show"),
+            "{}",
+            h.verdict
+        );
+        assert!(h.forecast.is_err());
+    }
+
+    #[test]
+    fn too_few_logs_or_no_counter_are_said_not_guessed() {
+        let two = vec![
+            point(0, Some(0.0), 0.2, 0.02),
+            point(1, Some(1e5), 0.25, 0.02),
+        ];
+        let h = head_trend("h".into(), two, &opts());
+        assert!(
+            h.verdict.contains("at least 3 calibrated logs"),
+            "{}",
+            h.verdict
+        );
+        // One log without the cycle counter: the abscissa is days (1 day apart).
+        let pts = vec![
+            point(0, Some(0.0), 0.2, 0.02),
+            point(1, None, 0.25, 0.02),
+            point(2, Some(2e5), 0.3, 0.02),
+        ];
+        let h = head_trend("h".into(), pts, &opts());
+        assert_eq!(h.abscissa, Some(history::Abscissa::Days));
+        assert!(
+            h.x.iter()
+                .zip([0.0, 1.0, 2.0])
+                .all(|(a, b)| (a - b).abs() < 1e-9),
+            "{:?}",
+            h.x
+        );
+        assert!(h.notes.iter().any(|n| n.contains(HEAD_CYCLES_KEY)));
+    }
+
+    #[test]
+    fn a_cache_that_is_not_one_is_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("cache.json");
+        std::fs::write(&p, b"{ not json").unwrap();
+        let e = TrendCache::load(&p).unwrap_err();
+        assert!(
+            e.contains("cache.json") && e.contains("not a trend cache"),
+            "{e}"
+        );
+        // A missing cache is an empty one.
+        let c = TrendCache::load(&dir.path().join("none.json")).unwrap();
+        assert!(c.entries.is_empty());
+    }
+}
