@@ -55,3 +55,4 @@ pub mod sim;
 pub mod solver;
 pub mod tui;
 pub mod vision;
+pub mod wear;

@@ -443,3 +443,49 @@ fn the_monitor_is_one_answer_from_cli_the_line_pane_and_batch_with_a_damaged_log
     assert!(render == cli, "render line differs from pinsight monitor");
     assert!(batch == cli, "batch export differs from pinsight monitor");
 }
+
+#[test]
+fn the_trend_is_one_answer_from_cli_the_trend_pane_and_batch() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Three short logs of a wearing head (the synthetic wear series).
+    let series = pinsight::rig::synth::wear_series::WearSeries {
+        logs: 3,
+        cycles_per_log: 8,
+        seed: 3,
+        ..Default::default()
+    };
+    let logs = series.write(d).unwrap();
+    let paths: Vec<String> = logs
+        .iter()
+        .map(|l| l.path.to_str().unwrap().to_string())
+        .collect();
+    let p: Vec<&str> = paths.iter().map(|s| s.as_str()).collect();
+    let mut args = vec!["trend"];
+    args.extend(&p);
+    args.push("--json");
+    let mut cli = run_json(&args, d);
+    let mut args = vec!["render", "trend"];
+    args.extend(&p);
+    args.extend(["--format", "json"]);
+    let mut render = run_json(&args, d)["report"].take();
+    let mut batch = batch_export(d, &p, "trend")["report"].take();
+    for v in [&mut cli, &mut render, &mut batch] {
+        without_timings(v);
+    }
+    assert_eq!(cli["calibrated"], 3, "{cli}");
+    let heads = cli["heads"].as_array().unwrap();
+    assert_eq!(heads.len(), 1);
+    assert_eq!(heads[0]["rig"], "head-A");
+    assert_eq!(heads[0]["points"].as_array().unwrap().len(), 3);
+    assert!(
+        heads[0]["fit"]["Ok"]["slope"].is_f64(),
+        "{}",
+        heads[0]["fit"]
+    );
+    assert!(
+        render == cli,
+        "render trend differs from pinsight trend:\n{render}\n{cli}"
+    );
+    assert!(batch == cli, "batch export differs from pinsight trend");
+}

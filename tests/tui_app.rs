@@ -55,7 +55,13 @@ fn new_app() -> App {
 fn every_pane_by_number_tab_and_mouse_and_help_lists_every_key() {
     let mut app = new_app();
     for (i, p) in PaneId::ALL.iter().enumerate() {
-        app.update(key(KeyCode::Char(char::from(b'1' + i as u8))));
+        // Panes 1–9 by their digit, the tenth (Trend) by T.
+        let c = if i < 9 {
+            char::from(b'1' + i as u8)
+        } else {
+            'T'
+        };
+        app.update(key(KeyCode::Char(c)));
         assert_eq!(app.pane, *p);
         // The Methods pane starts its lab when first shown.
         run_jobs(&mut app);
@@ -83,7 +89,7 @@ fn every_pane_by_number_tab_and_mouse_and_help_lists_every_key() {
     app.update(key(KeyCode::Tab));
     assert_eq!(app.pane, PaneId::Session);
     app.update(key(KeyCode::BackTab));
-    assert_eq!(app.pane, PaneId::Line);
+    assert_eq!(app.pane, PaneId::Trend);
     // Click on the third tab.
     let tabs = pinsight::tui::draw::tabs(120);
     app.update(Msg::Mouse(MouseEvent {

@@ -152,6 +152,9 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     // The Line pane: the demo log's 20 cycles against its process recipe.
     t.keys(&["9"]);
     t.wait_for("20 OK", 30.0);
+    // The Trend pane: the demo's log is embedded (no file to calibrate), said so.
+    t.keys(&["Tab"]);
+    t.wait_for("no log could be calibrated", 10.0);
     t.keys(&["Tab"]);
     t.wait_for("Metadata", 10.0);
     // Help overlay.

@@ -243,6 +243,41 @@ fn kind_of(v: &Value) -> &'static str {
     }
 }
 
+/// A batch `run trend` step: the wear trend over the session's logs; the
+/// detail line (logs, calibrations, each head's verdict), an error when a
+/// log was left out or the trend could not run.
+pub fn run_trend_step(
+    session: &mut Session,
+    progress: &crate::progress::Progress,
+) -> Result<String, String> {
+    session.run_trend_with(progress);
+    let t = match &session.trend {
+        Some(Ok(t)) => t,
+        Some(Err(e)) => return Err(e.clone()),
+        None => return Err("the trend did not run".into()),
+    };
+    let heads: Vec<String> = t
+        .heads
+        .iter()
+        .map(|h| format!("{}: {}", h.rig, h.verdict))
+        .collect();
+    let d = format!(
+        "{} log(s), {} calibrated; {}",
+        t.logs,
+        t.calibrated,
+        heads.join("; ")
+    );
+    if t.errors.is_empty() {
+        return Ok(d);
+    }
+    let left: Vec<String> = t
+        .errors
+        .iter()
+        .map(|e| format!("{}: {}", e.file, e.error))
+        .collect();
+    Err(format!("{d}; left out: {}", left.join("; ")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

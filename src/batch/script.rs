@@ -24,7 +24,7 @@
 //! study = { clearances_mm = [0.1, 0.5], speeds_rpm = [1200], materials = ["alloy_steel"], warmup = 1, revs = 1 }
 //!
 //! [[step]]
-//! kind = "run"                       # model | study | methods | yield | overlay | monitor
+//! kind = "run"                       # model | study | methods | yield | overlay | monitor | trend
 //! what = "model"
 //!
 //! [[step]]
@@ -478,7 +478,7 @@ impl Runner {
                     index,
                     "run",
                     "",
-                    "give `what` (model, study, methods, yield, overlay or monitor)",
+                    "give `what` (model, study, methods, yield, overlay, monitor or trend)",
                 );
             }
             Err(e) => return err(index, "run", "", e),
@@ -605,12 +605,16 @@ impl Runner {
                     None => err(index, "run", "monitor", "the monitor did not run"),
                 }
             }
+            "trend" => match super::run_trend_step(&mut self.session, &self.progress.child()) {
+                Ok(d) => ok(index, "run", "trend", d),
+                Err(d) => err(index, "run", "trend", d),
+            },
             other => err(
                 index,
                 "run",
                 other,
                 format!(
-                    "cannot run `{other}` (allowed: model, study, methods, yield, overlay, monitor)"
+                    "cannot run `{other}` (allowed: model, study, methods, yield, overlay, monitor, trend)"
                 ),
             ),
         }

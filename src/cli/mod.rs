@@ -16,6 +16,7 @@ pub mod overlay;
 pub mod render;
 pub mod simulate;
 pub mod sweep;
+pub mod trend;
 pub mod tui;
 pub mod yield_report;
 
@@ -45,6 +46,8 @@ pub enum Command {
     Overlay(overlay::Args),
     /// Judge every cycle's force curve against a process recipe (OK/NOK with reasons) and its SPC.
     Monitor(monitor::Args),
+    /// Wear trend of each head: clearance history, wear rate, limit and forecast.
+    Trend(trend::Args),
     /// Fit clearance, standoff, process load and sensor offsets to a rig log.
     Calibrate(calibrate::Args),
     /// Inspect connector images against a recipe.
@@ -90,6 +93,7 @@ pub fn main() -> ExitCode {
         Some(Command::Log(a)) => log::run(a),
         Some(Command::Overlay(a)) => overlay::run(a),
         Some(Command::Monitor(a)) => monitor::run(a),
+        Some(Command::Trend(a)) => trend::run(a),
         Some(Command::Calibrate(a)) => calibrate::run(a),
         Some(Command::Inspect(a)) => inspect::run(a),
         Some(Command::Yield(a)) => yield_report::run(a),

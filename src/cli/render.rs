@@ -9,7 +9,7 @@ use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Pane: session, signals, overlay, model, study, vision, yield, methods, line.
+    /// Pane: session, signals, overlay, model, study, vision, yield, methods, line, trend.
     pub pane: String,
     /// Logs, images, recipes, parameter files, folders (none: the embedded demo).
     pub inputs: Vec<String>,

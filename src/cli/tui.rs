@@ -17,7 +17,7 @@ pub struct Args {
     /// Images in the terminal: auto (kitty / sixel / iTerm2 when the terminal has it, else half-blocks), halfblocks, off.
     #[arg(long, default_value = "auto")]
     pub images: String,
-    /// Pane to start on (session, signals, overlay, model, study, vision, yield, methods, line).
+    /// Pane to start on (session, signals, overlay, model, study, vision, yield, methods, line, trend).
     #[arg(long, default_value = "session")]
     pub pane: String,
 }

@@ -17,4 +17,5 @@ pub mod model;
 pub mod overlay;
 pub mod process;
 pub mod signals;
+pub mod trend;
 pub mod vision;

@@ -17,6 +17,7 @@
 //! | Yield | [`yields`] | batch yield, confidence interval, Pareto, worst pins |
 //! | Methods | [`methods`] | work–precision and stability charts |
 //! | Line | [`line`] | process monitor: cycles OK/NOK with reasons, the press curve against its objects, SPC with Cpk bands, run-rule alarms, process × vision |
+//! | Trend | [`trend`] | wear trend: a head's clearance ± U95 per log, the fitted wear, the limit and the forecast |
 
 pub mod chart;
 pub mod demo;
@@ -28,6 +29,7 @@ pub mod session;
 pub mod session_pane;
 pub mod signals;
 pub mod study;
+pub mod trend;
 pub mod vision;
 pub mod yields;
 
@@ -48,10 +50,11 @@ pub enum PaneId {
     Yield,
     Methods,
     Line,
+    Trend,
 }
 
 impl PaneId {
-    pub const ALL: [PaneId; 9] = [
+    pub const ALL: [PaneId; 10] = [
         PaneId::Session,
         PaneId::Signals,
         PaneId::Overlay,
@@ -61,6 +64,7 @@ impl PaneId {
         PaneId::Yield,
         PaneId::Methods,
         PaneId::Line,
+        PaneId::Trend,
     ];
 
     pub fn name(self) -> &'static str {
@@ -74,6 +78,7 @@ impl PaneId {
             PaneId::Yield => "yield",
             PaneId::Methods => "methods",
             PaneId::Line => "line",
+            PaneId::Trend => "trend",
         }
     }
 
@@ -88,6 +93,7 @@ impl PaneId {
             PaneId::Yield => "Yield",
             PaneId::Methods => "Methods",
             PaneId::Line => "Line",
+            PaneId::Trend => "Trend",
         }
     }
 
@@ -124,6 +130,7 @@ pub struct PaneState {
     pub yields: yields::YieldUi,
     pub methods: methods::MethodsUi,
     pub line: line::LineUi,
+    pub trend: trend::TrendUi,
 }
 
 impl PaneState {
@@ -140,6 +147,7 @@ impl PaneState {
             yields: Default::default(),
             methods: Default::default(),
             line: Default::default(),
+            trend: Default::default(),
         }
     }
 
@@ -164,6 +172,7 @@ impl PaneState {
             "yield" => self.yields.set(k, value),
             "methods" => self.methods.set(k, value),
             "line" => self.line.set(k, value),
+            "trend" => self.trend.set(k, value),
             _ => Err("an option is named pane.key".to_string()),
         };
         res.map_err(|e| {
@@ -194,6 +203,7 @@ pub const UI_OPTIONS: &[&str] = &[
     "methods.chart",
     "line.cycle",
     "line.log",
+    "trend.head",
 ];
 
 pub(crate) fn parse_f64(v: &str) -> Result<f64, String> {
@@ -225,6 +235,7 @@ pub enum PaneView {
     Yield(yields::YieldView),
     Methods(methods::MethodsView),
     Line(line::LineView),
+    Trend(trend::TrendView),
 }
 
 impl PaneView {
@@ -239,6 +250,7 @@ impl PaneView {
             PaneView::Yield(_) => PaneId::Yield,
             PaneView::Methods(_) => PaneId::Methods,
             PaneView::Line(_) => PaneId::Line,
+            PaneView::Trend(_) => PaneId::Trend,
         }
     }
 
@@ -259,6 +271,7 @@ impl PaneView {
             PaneView::Yield(v) => v.to_csv(),
             PaneView::Methods(v) => v.to_csv(),
             PaneView::Line(v) => v.to_csv(),
+            PaneView::Trend(v) => v.to_csv(),
         }
     }
 
@@ -274,6 +287,7 @@ impl PaneView {
             PaneView::Yield(v) => v.panels(),
             PaneView::Methods(v) => v.panels.clone(),
             PaneView::Line(v) => v.chart.iter().map(|c| c.to_panel()).collect(),
+            PaneView::Trend(v) => v.report.as_ref().map_or_else(Vec::new, |r| r.panels()),
         }
     }
 }
@@ -290,6 +304,7 @@ pub fn view(pane: PaneId, session: &Session, ui: &PaneState) -> PaneView {
         PaneId::Yield => PaneView::Yield(yields::view(session, ui)),
         PaneId::Methods => PaneView::Methods(methods::view(session, ui)),
         PaneId::Line => PaneView::Line(line::view(session, ui)),
+        PaneId::Trend => PaneView::Trend(trend::view(session, ui)),
     }
 }
 

@@ -66,6 +66,9 @@ pub struct Session {
     /// since), or why it could not run. Shared: the Line pane's view holds it
     /// every frame without copying it.
     pub monitor: Option<Result<std::sync::Arc<MonitorRun>, String>>,
+    /// The wear trend over the logs (None: not run, or the logs or recipes
+    /// changed since), or why it could not run.
+    pub trend: Option<Result<std::sync::Arc<crate::wear::TrendReport>, String>>,
 }
 
 impl Default for Session {
@@ -99,6 +102,7 @@ impl Session {
             overlays: Default::default(),
             process_recipes: Vec::new(),
             monitor: None,
+            trend: None,
         }
     }
 
@@ -128,6 +132,7 @@ impl Session {
                     self.files.push(e);
                     self.logs.push(*log);
                     self.monitor = None;
+                    self.trend = None;
                 }
                 Loaded::Process(e, r) => {
                     self.files.push(e);
@@ -137,6 +142,7 @@ impl Session {
                 Loaded::Recipe(e, r) => {
                     self.files.push(e);
                     self.recipes.push(*r);
+                    self.trend = None;
                     // Another recipe can change which one an image gets.
                     self.inspections.clear();
                     self.yields = None;
@@ -251,6 +257,10 @@ impl Session {
                 self.run_monitor_with(&Progress::hidden());
                 return Some(format!("monitor over {} log(s)", self.logs.len()));
             }
+            PaneId::Trend if !self.logs.is_empty() && self.trend.is_none() => {
+                self.run_trend_with(&Progress::hidden());
+                return Some(format!("trend over {} log(s)", self.logs.len()));
+            }
             _ => {}
         }
         None
@@ -324,6 +334,17 @@ impl Session {
             &self.overlays,
             progress,
         ));
+    }
+
+    /// Runs the wear trend over the logs now, reporting to (and stopped by) `progress`.
+    pub fn run_trend_with(&mut self, progress: &Progress) {
+        let r = crate::engine::trend::trend_session(&self.logs, &self.recipes, progress);
+        self.set_trend(r);
+    }
+
+    /// Records a finished trend (or why it could not run).
+    pub fn set_trend(&mut self, r: Result<crate::wear::TrendReport, String>) {
+        self.trend = Some(r.map(std::sync::Arc::new));
     }
 
     /// Records a finished monitor run (or why it could not run).

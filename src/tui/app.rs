@@ -272,6 +272,7 @@ impl App {
                 let i = d as usize - '1' as usize;
                 self.switch(PaneId::ALL[i]);
             }
+            KeyCode::Char('T') => self.switch(PaneId::Trend),
             KeyCode::Char('o') => self.prompt = Some(String::new()),
             KeyCode::Down | KeyCode::Char('j') => self.rows(1),
             KeyCode::Up | KeyCode::Char('k') => self.rows(-1),
@@ -378,6 +379,13 @@ impl App {
                 let cur = self.ui.line.cycle.unwrap_or(n.saturating_sub(1));
                 self.ui.line.cycle = Some(step(cur.min(n.saturating_sub(1)), n));
             }
+            PaneId::Trend => {
+                let n = match &self.session.trend {
+                    Some(Ok(r)) => r.heads.len(),
+                    _ => 0,
+                };
+                self.ui.trend.head = step(self.ui.trend.head, n);
+            }
             PaneId::Methods => {
                 let n = crate::panes::methods::view(&self.session, &self.ui)
                     .chart_titles
@@ -454,6 +462,9 @@ impl App {
                 }
                 _ => {}
             },
+            PaneId::Trend if k.code == KeyCode::Char('r') && !self.session.logs.is_empty() => {
+                self.start_trend();
+            }
             PaneId::Model => match k.code {
                 KeyCode::Enter | KeyCode::Char('e') => {
                     self.ui.model.editing =

@@ -70,7 +70,13 @@ pub fn tabs(width: u16) -> Vec<(PaneId, String, u16, u16)> {
         } else {
             p.title().to_string()
         };
-        let label = format!("{} {} ", i + 1, name);
+        // Panes 1–9 by their digit, the tenth (Trend) by T.
+        let key = if i < 9 {
+            (i + 1).to_string()
+        } else {
+            "T".into()
+        };
+        let label = format!("{key} {name} ");
         let w = label.chars().count() as u16;
         out.push((*p, label, x, x + w));
         x += w;
@@ -90,6 +96,7 @@ fn hints(pane: PaneId) -> &'static str {
         PaneId::Yield => "j/k select",
         PaneId::Methods => "j/k chart  r re-run",
         PaneId::Line => "j/k cycle  r re-run",
+        PaneId::Trend => "j/k head  r re-run",
     }
 }
 

@@ -50,6 +50,14 @@ impl App {
             {
                 self.start_monitor();
             }
+            PaneId::Trend
+                if !self.session.logs.is_empty()
+                    && self.session.trend.is_none()
+                    && !self.is_running(JobKind::Trend)
+                    && !self.suppressed.contains(&JobKind::Trend) =>
+            {
+                self.start_trend();
+            }
             PaneId::Overlay if !self.session.logs.is_empty() => {
                 let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
                 if self.session.overlay_of(i).is_none()
@@ -81,6 +89,13 @@ impl App {
             images: self.session.images.clone(),
             book,
             overlays: self.session.overlays.clone(),
+        });
+    }
+
+    pub fn start_trend(&mut self) {
+        self.start(JobRequest::Trend {
+            logs: self.session.logs.clone(),
+            recipes: self.session.recipes.clone(),
         });
     }
 
@@ -156,7 +171,11 @@ impl App {
             r.progress.cancel();
             if matches!(
                 r.kind,
-                JobKind::Inspect | JobKind::Yield | JobKind::Overlay | JobKind::Monitor
+                JobKind::Inspect
+                    | JobKind::Yield
+                    | JobKind::Overlay
+                    | JobKind::Monitor
+                    | JobKind::Trend
             ) {
                 self.suppressed.push(r.kind);
             }
@@ -248,6 +267,21 @@ impl App {
                     Err(e) => (format!("monitor: {e}"), true),
                 });
                 self.session.set_monitor(*r);
+            }
+            JobOutput::Trend(r) => {
+                self.message = Some(match &*r {
+                    Ok(t) => (
+                        format!(
+                            "trend: {} head(s), {} log(s) calibrated, {} left out",
+                            t.heads.len(),
+                            t.calibrated,
+                            t.errors.len()
+                        ),
+                        !t.errors.is_empty(),
+                    ),
+                    Err(e) => (format!("trend: {e}"), true),
+                });
+                self.session.set_trend(*r);
             }
             JobOutput::Yield(r) => {
                 let rep = &r.report;

@@ -8,8 +8,8 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ("everywhere", "Tab  Shift-Tab", "next / previous pane"),
     (
         "everywhere",
-        "1 … 9",
-        "Session Signals Overlay Model Study Vision Yield Methods Line",
+        "1 … 9  T",
+        "Session Signals Overlay Model Study Vision Yield Methods Line, T Trend",
     ),
     (
         "everywhere",
@@ -68,4 +68,6 @@ pub const KEYS: &[(&str, &str, &str)] = &[
         "choose the cycle shown against its objects",
     ),
     ("Line", "r", "run the process monitor again"),
+    ("Trend", "j k", "choose the head (rig) shown"),
+    ("Trend", "r", "calibrate the logs and fit the trend again"),
 ];

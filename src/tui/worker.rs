@@ -32,6 +32,7 @@ pub enum JobKind {
     Yield,
     Overlay,
     Monitor,
+    Trend,
 }
 
 /// A unit of background work.
@@ -69,6 +70,11 @@ pub enum JobRequest {
         /// The overlays already run (their bands join the connectors' stories).
         overlays: std::collections::BTreeMap<usize, crate::engine::overlay::OverlayRun>,
     },
+    /// The wear trend over the session's logs (the Trend pane).
+    Trend {
+        logs: Vec<crate::engine::entries::LogEntry>,
+        recipes: Vec<crate::engine::entries::RecipeEntry>,
+    },
     /// Measured vs predicted for one log.
     Overlay {
         index: usize,
@@ -88,6 +94,7 @@ impl JobRequest {
             JobRequest::Yield { .. } => JobKind::Yield,
             JobRequest::Overlay { .. } => JobKind::Overlay,
             JobRequest::Monitor { .. } => JobKind::Monitor,
+            JobRequest::Trend { .. } => JobKind::Trend,
         }
     }
 
@@ -100,6 +107,7 @@ impl JobRequest {
             JobRequest::Yield { images, .. } => format!("yield over {} images", images.len()),
             JobRequest::Overlay { log, .. } => format!("overlay of {}", log.file),
             JobRequest::Monitor { logs, .. } => format!("monitor over {} log(s)", logs.len()),
+            JobRequest::Trend { logs, .. } => format!("trend over {} log(s)", logs.len()),
             JobRequest::Load { paths } => match paths.as_slice() {
                 [one] => format!("opening {}", one.display()),
                 many => format!("opening {} paths", many.len()),
@@ -119,6 +127,7 @@ pub enum JobOutput {
     Yield(Box<YieldRun>),
     Overlay(Box<OverlayRun>),
     Monitor(Box<Result<crate::process::run::MonitorRun, String>>),
+    Trend(Box<Result<crate::wear::TrendReport, String>>),
     /// The job panicked (a defect): the message, for the status line.
     Failed(String),
 }
@@ -161,6 +170,9 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
             &overlays,
             progress,
         ))),
+        JobRequest::Trend { logs, recipes } => JobOutput::Trend(Box::new(
+            crate::engine::trend::trend_session(&logs, &recipes, progress),
+        )),
         JobRequest::Load { paths } => {
             let mut out = Vec::new();
             for p in paths {

@@ -27,6 +27,7 @@
 
 pub mod faults;
 mod truth;
+pub mod wear_series;
 mod write;
 
 pub use truth::*;

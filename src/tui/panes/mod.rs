@@ -34,6 +34,7 @@ pub fn draw_pane(f: &mut Frame, area: Rect, view: &PaneView, theme: &Theme, img:
         PaneView::Yield(v) => yields::yields(f, area, v, theme),
         PaneView::Methods(v) => methods::methods(f, area, v, theme),
         PaneView::Line(v) => line::line(f, area, v, theme),
+        PaneView::Trend(v) => trend::trend(f, area, v, theme),
     }
 }
 
@@ -63,5 +64,6 @@ mod overlay;
 mod session_pane;
 mod signals;
 mod study;
+mod trend;
 mod vision;
 mod yields;

@@ -1,0 +1,117 @@
+//! The wear trend on a synthetic history whose wear is known: a head whose
+//! true clearance grows linearly in its cumulative cycles (c = 0.15 mm +
+//! 2.5e-7 mm/cycle · n, 7 days and 200 000 cycles between logs, 12 cycles
+//! per log), written by `rig::synth::wear_series`, calibrated and fitted by
+//! `engine::trend::run_trend` (the one path of `pinsight trend`). The truth
+//! is the generator's input, never read back from the logs.
+
+use pinsight::engine::trend::{TrendCache, TrendOptions, run_trend};
+use pinsight::progress::Progress;
+use pinsight::rig::synth::wear_series::WearSeries;
+use pinsight::wear::Abscissa;
+
+#[test]
+fn a_known_wear_rate_is_recovered_and_the_cache_calibrates_only_the_new_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let series = WearSeries {
+        logs: 8,
+        seed: 7,
+        ..WearSeries::default()
+    };
+    let logs = series.write(dir.path()).unwrap();
+    let bad = dir.path().join("corrupt.mcap");
+    std::fs::write(&bad, b"not an mcap file at all").unwrap();
+    let missing = dir.path().join("missing.mcap");
+    let limit = 0.8;
+    let opts = TrendOptions {
+        limit_mm: Some(limit),
+        level: 0.95,
+        ..TrendOptions::default()
+    };
+    let mut cache = TrendCache::default();
+
+    // Day 1: the first 7 logs, a corrupt one and a missing one.
+    let mut inputs: Vec<_> = logs[..7].iter().map(|l| l.path.clone()).collect();
+    inputs.push(bad.clone());
+    inputs.push(missing.clone());
+    let r = run_trend(&inputs, &opts, &mut cache, &Progress::hidden());
+    assert_eq!(r.calibrated, 7, "{:?}", r.errors);
+    assert_eq!(r.cached, 0);
+    assert_eq!(cache.entries.len(), 7);
+    // Bad input: each listed with its error naming the file, the rest reported.
+    assert_eq!(r.errors.len(), 2, "{:?}", r.errors);
+    let bad_err = r
+        .errors
+        .iter()
+        .find(|e| e.file.ends_with("corrupt.mcap"))
+        .unwrap();
+    assert!(bad_err.error.contains("MCAP"), "{}", bad_err.error);
+    let miss_err = r
+        .errors
+        .iter()
+        .find(|e| e.file.ends_with("missing.mcap"))
+        .unwrap();
+    assert!(
+        miss_err.error.contains("no such file"),
+        "{}",
+        miss_err.error
+    );
+    assert_eq!(r.heads.len(), 1);
+    assert_eq!(r.heads[0].points.len(), 7);
+
+    // Day 2: one new log; the cache holds the other 7.
+    let all: Vec<_> = logs
+        .iter()
+        .map(|l| l.path.clone())
+        .chain([bad.clone()])
+        .collect();
+    let r = run_trend(&all, &opts, &mut cache, &Progress::hidden());
+    assert_eq!(r.calibrated, 1, "only the new log is calibrated");
+    assert_eq!(r.cached, 7);
+    assert_eq!(r.errors.len(), 1);
+    let h = &r.heads[0];
+    assert_eq!(h.rig, "head-A");
+    assert_eq!(h.abscissa, Some(Abscissa::Cycles));
+    // Ordered by start time; the abscissa is the metadata's cycle counter.
+    let truth_x: Vec<f64> = logs.iter().map(|l| l.head_cycles).collect();
+    assert_eq!(h.x, truth_x);
+    let f = h.fit.as_ref().unwrap();
+    let true_rate = series.rate_mm_per_cycle;
+    eprintln!(
+        "true rate {true_rate:e} mm/cycle; fitted {:e} [{:e}, {:e}] (95 %), χ²/ν {:.2}, R² {:.3}",
+        f.slope, f.slope_lo95, f.slope_hi95, f.chi2_red, f.r2
+    );
+    for (p, l) in h.points.iter().zip(&logs) {
+        eprintln!(
+            "  n {:>8.0}: true {:.4} calibrated {:.4} ± {:.4}",
+            l.head_cycles, l.clearance_mm, p.clearance_mm, p.u95_mm
+        );
+    }
+    assert!(
+        f.slope_lo95 <= true_rate && true_rate <= f.slope_hi95,
+        "the true rate {true_rate:e} is outside the fitted 95 % interval [{:e}, {:e}]",
+        f.slope_lo95,
+        f.slope_hi95
+    );
+    assert_eq!(f.dof, 6);
+
+    // The forecast: the fitted line's crossing of the limit, counted from the last log.
+    let fc = h.forecast.as_ref().unwrap();
+    let closed = (limit - f.intercept) / f.slope;
+    assert!(
+        (fc.at - closed).abs() <= 1e-9 * closed,
+        "{} vs {closed}",
+        fc.at
+    );
+    assert!((fc.remaining - (closed - truth_x[7])).abs() <= 1e-9 * closed);
+    // 200 000 cycles per 7 days.
+    let per_day = 200_000.0 / 7.0;
+    assert!((h.cycles_per_day.unwrap() - per_day).abs() < 1e-6 * per_day);
+    assert!((fc.days.unwrap() - fc.remaining / per_day).abs() < 1e-9 * fc.days.unwrap());
+    let true_cross = (limit - series.c0_mm) / true_rate;
+    eprintln!(
+        "crossing of {limit} mm: true {true_cross:.0}, forecast {:.0} [{:.0}, {:?}] (95 %)",
+        fc.at, fc.at_lo, fc.at_hi
+    );
+    assert!(fc.at_lo < fc.at && fc.at_hi.is_some_and(|hi| hi > fc.at));
+}
