@@ -25,7 +25,9 @@ use super::label;
 use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
 use super::result::*;
-use super::side_row::{bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale};
+use super::side_row::{
+    bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
+};
 use super::tip_levels;
 
 /// A bar (pin candidate) measured at full resolution.
@@ -338,27 +340,21 @@ pub fn inspect_side<P: Px>(
             }
         }
     };
-    // Reject the wrong part: bars at spacings unlike the recipe's pitch
-    // (most spacings must be whole multiples of it).
-    if fixed_s.is_some() && bars.len() >= 3 {
-        let on_pitch = spacings
-            .iter()
-            .filter(|&&d| {
-                let r = d / pitch_px;
-                r >= 0.8 && (r - r.round()).abs() <= 0.2
-            })
-            .count();
-        if 2 * on_pitch < spacings.len() {
-            let mut d = spacings.clone();
-            let md = grid::median(&mut d).unwrap_or(f64::NAN);
-            return Err(VisionError::WrongPart {
-                part,
-                msg: format!(
-                    "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
-                    recipe.mm_per_px.unwrap_or(f64::NAN)
-                ),
-            });
-        }
+    // Reject the wrong part: bars off the recipe's lattice, judged on the
+    // row as a whole (a pin bent towards its neighbour changes two
+    // spacings, not the lattice).
+    let u_bars: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+    let ok_off_px = fixed_s.map_or(0.0, |s| recipe.tolerance.position_mm * s);
+    if fixed_s.is_some() && !row_fits_lattice(&u_bars, pitch_px, ok_off_px.max(0.15 * pitch_px)) {
+        let mut d = spacings.clone();
+        let md = grid::median(&mut d).unwrap_or(f64::NAN);
+        return Err(VisionError::WrongPart {
+            part,
+            msg: format!(
+                "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
+                recipe.mm_per_px.unwrap_or(f64::NAN)
+            ),
+        });
     }
     let u_ref = bars[0].u_px;
     let (mut cph, mut sph) = (0.0, 0.0);

@@ -200,6 +200,45 @@ pub(super) fn refine_pitch(spacings: &[f64], prior: f64) -> Option<f64> {
     grid::median(&mut est)
 }
 
+/// Whether pins at positions `u` along the row (px) lie on a lattice of
+/// pitch `pitch` as a whole: the lattice's offset is the one that puts the
+/// most pins within `tol` px of a node (`tol`: what an ok pin may be off),
+/// and the row fits when at least half the pins sit on nodes and fewer than
+/// a quarter sit midway between them (0.4 pitch or more off: no bent pin of
+/// this part stands there). Judged as a whole, not spacing by spacing, so
+/// two neighbours bent apart (a spacing of 1.6 pitch and one of 0.4) do not
+/// make a wrong part.
+pub(super) fn row_fits_lattice(u: &[f64], pitch: f64, tol: f64) -> bool {
+    if u.len() < 3 || !(pitch.is_finite() && pitch > 0.0) {
+        return true;
+    }
+    let tol = tol.min(0.35 * pitch);
+    let res = |u0: f64, x: f64| {
+        let a = (x - u0) / pitch;
+        (a - a.round()) * pitch
+    };
+    let mut best = (0usize, u[0]);
+    for &u0 in u {
+        let n = u.iter().filter(|&&x| res(u0, x).abs() <= tol).count();
+        if n > best.0 {
+            best = (n, u0);
+        }
+    }
+    // Refine the offset to the mean residual of the pins on nodes.
+    let on: Vec<f64> = u
+        .iter()
+        .map(|&x| res(best.1, x))
+        .filter(|r| r.abs() <= tol)
+        .collect();
+    let u0 = best.1 + on.iter().sum::<f64>() / on.len().max(1) as f64;
+    let inl = u.iter().filter(|&&x| res(u0, x).abs() <= tol).count();
+    let between = u
+        .iter()
+        .filter(|&&x| res(u0, x).abs() >= 0.4 * pitch)
+        .count();
+    2 * inl >= u.len() && !(between >= 2 && 4 * between >= u.len())
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -212,5 +251,22 @@ mod tests {
         let p = super::refine_pitch(&[10.0, 14.5, 30.3], 10.0).unwrap();
         assert!((p - 10.05).abs() < 1e-9, "{p}");
         assert_eq!(super::refine_pitch(&[], 10.0), None);
+    }
+
+    #[test]
+    fn a_row_is_judged_against_its_lattice_as_a_whole() {
+        use super::row_fits_lattice as fits;
+        // Pitch 20 px, ok pins within 1 px; pins 1 and 2 of 5 bent apart
+        // by 0.3 pitch: spacings 14, 32, 14 but the row is this part.
+        assert!(fits(&[0.0, 14.0, 46.0, 60.0, 80.3], 20.0, 3.0));
+        // A part at 1.27 × the pitch: most pins off the nodes.
+        let u: Vec<f64> = (0..10).map(|i| i as f64 * 25.4).collect();
+        assert!(!fits(&u, 20.0, 3.0));
+        // A part at half the pitch: every other pin midway between nodes.
+        let u: Vec<f64> = (0..8).map(|i| i as f64 * 10.0).collect();
+        assert!(!fits(&u, 20.0, 3.0));
+        // Twice the pitch (every other pin missing) is still on the lattice.
+        let u: Vec<f64> = (0..5).map(|i| i as f64 * 40.0 + 0.5).collect();
+        assert!(fits(&u, 20.0, 3.0));
     }
 }
