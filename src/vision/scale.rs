@@ -9,7 +9,10 @@
 //! blobs whose nearest neighbour along a row or a column (within ±12°) is
 //! at the recipe's pitch *for that tip width* (pitch / pin_mm × width,
 //! ±15 %), minus those whose nearest is at half that pitch (a lattice of every
-//! other pin is not the lattice). The best candidate's matched spacings
+//! other pin is not the lattice). Only candidates whose matched blobs reach
+//! 0.35 of the strongest candidate's top-hat peak count (the tips are the
+//! scene's strongest blobs; fixture texture forms lattices too), and only a
+//! tip-strong one stops the ladder early. The best candidate's matched spacings
 //! give the pitch in pixels (median), hence the scale; its blobs' median
 //! size must agree with the tip width the pitch implies (a factor of 2 at
 //! most; blur and threshold widen a blob), which is the cross-check that
