@@ -135,6 +135,10 @@ fn report(o: &[Outcome], wall: f64, list: bool) {
         .get(((sorted.len() as f64) * 0.99) as usize)
         .map(|v| v.sqrt())
         .unwrap_or(0.0);
+    let median = sorted
+        .get(sorted.len() / 2)
+        .map(|v| v.sqrt())
+        .unwrap_or(0.0);
     let good = o.iter().filter(|x| x.f.defects.is_empty()).count();
     let mpx: f64 = o
         .iter()
@@ -147,7 +151,7 @@ fn report(o: &[Outcome], wall: f64, list: bool) {
         1e3 * t_insp / n as f64
     );
     println!(
-        "connector verdicts right {right}/{n} = {}; errors {errors}; pin statuses right {}/{pins} = {}; ok-pin centre RMS {rms:.4} px over {} pins (99th percentile {p99:.3} px)",
+        "connector verdicts right {right}/{n} = {}; errors {errors}; pin statuses right {}/{pins} = {}; ok-pin centre RMS {rms:.4} px over {} pins (median {median:.3} px, 99th percentile {p99:.3} px)",
         pct(right, n),
         pins - pins_wrong,
         pct(pins - pins_wrong, pins),

@@ -3,9 +3,10 @@
 //! a look unlike our own `synth::Scene`. Seeds 200 000 … 200 239 are
 //! held out: the pipeline was tuned on 0 … 999 (`examples/eval_envelope`).
 //!
-//! The floors below are a **ratchet at the level measured when this test
-//! was written** (2026-11-24: 90.0 % verdicts, 98.14 % pin statuses, 6
-//! errors, median 0.081 px on these 240), not issue 12's targets (≥ 99.5 % verdicts,
+//! The floors below are a **ratchet at the level last measured**, less a
+//! small margin (2026-11-24: 90.0 % verdicts, 98.14 % pin statuses, 6
+//! errors, median 0.081 px on these 240; 2026-11-25: 91.2 %, 98.43 %, 4
+//! errors, 0.080 px), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -86,17 +87,17 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 90.0,
+        pct(right, n) >= 90.8,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );
     assert!(
-        pct(pins - pins_wrong, pins) >= 98.1,
+        pct(pins - pins_wrong, pins) >= 98.3,
         "pin statuses right: {:.2} %",
         pct(pins - pins_wrong, pins)
     );
     assert!(
-        errors <= 6,
+        errors <= 5,
         "{errors} images inside the envelope ended as errors"
     );
     assert!(median <= 0.085, "ok-pin centre error median {median:.3} px");

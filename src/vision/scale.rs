@@ -9,7 +9,10 @@
 //! blobs whose nearest neighbour along a row or a column (within ±12°) is
 //! at the recipe's pitch *for that tip width* (pitch / pin_mm × width,
 //! ±15 %), minus those whose nearest is at half that pitch (a lattice of every
-//! other pin is not the lattice). The best candidate's matched spacings
+//! other pin is not the lattice). Only candidates whose matched blobs reach
+//! 0.35 of the strongest candidate's top-hat peak count (the tips are the
+//! scene's strongest blobs; fixture texture forms lattices too), and only a
+//! tip-strong one stops the ladder early. The best candidate's matched spacings
 //! give the pitch in pixels (median), hence the scale; its blobs' median
 //! size must agree with the tip width the pitch implies (a factor of 2 at
 //! most; blur and threshold widen a blob), which is the cross-check that
@@ -40,7 +43,17 @@ struct Candidate {
     spacings: Vec<f64>,
     widths: Vec<f64>,
     w: f64,
+    /// Median top-hat peak of the matched blobs.
+    peak: f64,
 }
+
+/// A candidate's matched blobs must reach this share of the strongest
+/// candidate's (median top-hat peak) to count.
+const PEAK_SHARE: f64 = 0.35;
+/// Matched blobs this strong (fraction of full scale) end the search early;
+/// the envelope's faintest tips (contrast 0.3, gain 0.6, vignetted to half)
+/// stand about 5 % of full scale.
+const DONE_PEAK: f64 = 0.03;
 
 /// Smallest tip width tried, px.
 const W_MIN: f64 = 3.5;
@@ -59,7 +72,7 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
         PinShape::Square => w * w,
         PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
     };
-    let pts: Vec<(f64, f64, f64)> = found
+    let pts: Vec<(f64, f64, f64, f64)> = found
         .blobs
         .iter()
         .filter_map(|b: &CoarseBlob| {
@@ -68,7 +81,7 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             let dim = b.blob.width().max(b.blob.height()) as f64 * k;
             ((0.3..3.0).contains(&r) && dim < 2.5 * w + 2.0 * k).then(|| {
                 let (x, y) = coarse.to_full(b.blob.cx, b.blob.cy);
-                (x, y, width_of_area(a, recipe.pin_shape))
+                (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64)
             })
         })
         .collect();
@@ -78,12 +91,13 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
     let (mut score, mut support) = (0i64, 0usize);
     let mut spacings = Vec::new();
     let mut widths = Vec::new();
+    let mut peaks = Vec::new();
     // Blobs sorted by x for a windowed neighbour search.
     let mut order: Vec<usize> = (0..pts.len()).collect();
     order.sort_by(|&a, &b| pts[a].0.total_cmp(&pts[b].0));
     let reach = 1.3 * px.max(py);
     for (oi, &i) in order.iter().enumerate() {
-        let (xi, yi, wi) = pts[i];
+        let (xi, yi, wi, pi) = pts[i];
         // Nearest blob in the +x cone and in the ±y cone (within ±12°).
         let (mut nx, mut ny) = (f64::INFINITY, f64::INFINITY);
         let lo = order[..oi]
@@ -126,14 +140,17 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             score += 1;
             support += 1;
             widths.push(wi);
+            peaks.push(pi);
         }
     }
+    let peak = super::grid::median(&mut peaks).unwrap_or(0.0);
     Candidate {
         score,
         support,
         spacings,
         widths,
         w,
+        peak,
     }
 }
 
@@ -156,7 +173,7 @@ pub fn estimate<P: Px>(
     let fit_y = wd.max(ht) / (n_y * recipe.pitch_mm[1] / recipe.pin_mm);
     let w_max = (1.15 * fit_x.min(fit_y)).min(wd.min(ht) / 3.0).max(W_MIN);
     let mut coarse_cache: Vec<Option<Coarse>> = vec![None; 9];
-    let mut best: Option<Candidate> = None;
+    let mut cands: Vec<Candidate> = Vec::new();
     // From the largest candidate down: large ones are cheap (coarse images).
     let n_pos = recipe.positions().len() as f64;
     let mut w = w_max;
@@ -174,20 +191,30 @@ pub fn estimate<P: Px>(
             contrast_checked = true;
         }
         let c = score_candidate(recipe, coarse, w);
-        let better = match &best {
-            None => c.score > 0,
-            Some(b) => c.score > b.score,
-        };
-        // Every position of the recipe in a row already: no smaller
-        // candidate can do better (and smaller ones cost the most).
-        let done = c.score as f64 >= 0.9 * n_pos;
-        if better {
-            best = Some(c);
+        // Every position of the recipe in a row already, and in blobs of a
+        // tip's contrast: no smaller candidate can do better (and smaller
+        // ones cost the most). A lattice of faint blobs (fixture texture,
+        // vignetting bumps at a large width) does not end the search.
+        let done = c.score as f64 >= 0.9 * n_pos && c.peak >= DONE_PEAK * full_scale as f64;
+        if c.score > 0 {
+            cands.push(c);
         }
         if done {
             break;
         }
         w /= 1.2;
+    }
+    // The tips are the scene's strongest blobs: a candidate counts only if
+    // its matched blobs stand at least `PEAK_SHARE` of the strongest
+    // candidate's (a lattice of texture blobs at 5 × the tip width scores
+    // as many neighbours as the few pins but at a hundredth of their
+    // contrast). Among those, the highest score; ties to the larger width.
+    let top_peak = cands.iter().map(|c| c.peak).fold(0.0, f64::max);
+    let mut best: Option<Candidate> = None;
+    for c in cands {
+        if c.peak >= PEAK_SHARE * top_peak && best.as_ref().is_none_or(|b| c.score > b.score) {
+            best = Some(c);
+        }
     }
     let Some(b) = best else {
         return Err(no_pins(format!(

@@ -25,7 +25,10 @@ use super::label;
 use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
 use super::result::*;
-use super::side_row::{bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale};
+use super::side_row::{
+    bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
+    tip_crossing,
+};
 use super::tip_levels;
 
 /// A bar (pin candidate) measured at full resolution.
@@ -206,6 +209,7 @@ pub fn inspect_side<P: Px>(
     let (sn, cs) = phi.sin_cos();
 
     // 4. Bars at full resolution: axis and tip.
+    let mut ends = Vec::new();
     let mut bars = Vec::new();
     for b in &bar_blobs {
         let x0f = b.x_min as f64 * kf;
@@ -262,33 +266,29 @@ pub fn inspect_side<P: Px>(
             _ => perp,
         };
         let width_px = median_f32(&mut widths) as f64;
-        // Tip: half-level crossing along the axis, averaged over ±2 px.
+        // Tip: the apex of the half-level contour, corrected for the blur's
+        // pull on a rounded end (`side_row::tip_crossing`, the row's median
+        // shape and blur below).
         let t0 = tip_guess - 2.0 * kf - 4.0;
         let t1 = tip_guess + 2.0 * kf + 4.0;
-        let n = ((t1 - t0) / 0.25) as usize;
-        let prof: Vec<f32> = (0..=n)
-            .map(|i| {
-                let y = t0 + i as f64 * 0.25;
-                let x = axis.y_at(y);
-                let mut s = 0.0;
-                for d in -2..=2 {
-                    s += sign * plane.bilinear(x + d as f64, y);
-                }
-                s / 5.0
-            })
-            .collect();
-        let m = prof.len();
-        let mut top: Vec<f32> = prof[..8].to_vec();
-        let mut bot: Vec<f32> = prof[m - 8..].to_vec();
-        let (lo, hi) = (median_f32(&mut top), median_f32(&mut bot));
-        let Some(f) = first_rise(&prof, 0.5 * (lo + hi)) else {
-            continue;
-        };
-        let ty = t0 + f * 0.25;
+        let sample = |d: f64, y: f64| sign * plane.bilinear(axis.y_at(y) + d, y);
+        if let Some(t) = tip_crossing(&sample, t0, t1, 0.5 * width_px) {
+            ends.push((axis, width_px, t));
+        }
+    }
+    // One part, one focus: the row's median end shape and blur.
+    let mut cc: Vec<f64> = ends.iter().map(|e| e.2.c).collect();
+    let mut ss: Vec<f64> = ends.iter().map(|e| e.2.sigma).collect();
+    let (c_row, s_row) = (
+        grid::median(&mut cc).unwrap_or(0.0),
+        grid::median(&mut ss).unwrap_or(0.0),
+    );
+    for (axis, width_px, t) in &ends {
+        let ty = t.tip_y(c_row, s_row);
         let tip = (axis.y_at(ty), ty);
         bars.push(Bar {
             tip,
-            width_px,
+            width_px: *width_px,
             u_px: cs * tip.0 + sn * tip.1,
             height_px: line.height_above(tip.0, tip.1),
         });
@@ -338,27 +338,21 @@ pub fn inspect_side<P: Px>(
             }
         }
     };
-    // Reject the wrong part: bars at spacings unlike the recipe's pitch
-    // (most spacings must be whole multiples of it).
-    if fixed_s.is_some() && bars.len() >= 3 {
-        let on_pitch = spacings
-            .iter()
-            .filter(|&&d| {
-                let r = d / pitch_px;
-                r >= 0.8 && (r - r.round()).abs() <= 0.2
-            })
-            .count();
-        if 2 * on_pitch < spacings.len() {
-            let mut d = spacings.clone();
-            let md = grid::median(&mut d).unwrap_or(f64::NAN);
-            return Err(VisionError::WrongPart {
-                part,
-                msg: format!(
-                    "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
-                    recipe.mm_per_px.unwrap_or(f64::NAN)
-                ),
-            });
-        }
+    // Reject the wrong part: bars off the recipe's lattice, judged on the
+    // row as a whole (a pin bent towards its neighbour changes two
+    // spacings, not the lattice).
+    let u_bars: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+    let ok_off_px = fixed_s.map_or(0.0, |s| recipe.tolerance.position_mm * s);
+    if fixed_s.is_some() && !row_fits_lattice(&u_bars, pitch_px, ok_off_px.max(0.15 * pitch_px)) {
+        let mut d = spacings.clone();
+        let md = grid::median(&mut d).unwrap_or(f64::NAN);
+        return Err(VisionError::WrongPart {
+            part,
+            msg: format!(
+                "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
+                recipe.mm_per_px.unwrap_or(f64::NAN)
+            ),
+        });
     }
     let u_ref = bars[0].u_px;
     let (mut cph, mut sph) = (0.0, 0.0);

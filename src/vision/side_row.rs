@@ -200,6 +200,134 @@ pub(super) fn refine_pitch(spacings: &[f64], prior: f64) -> Option<f64> {
     grid::median(&mut est)
 }
 
+/// Whether pins at positions `u` along the row (px) lie on a lattice of
+/// pitch `pitch` as a whole: the lattice's offset is the one that puts the
+/// most pins within `tol` px of a node (`tol`: what an ok pin may be off),
+/// and the row fits when at least half the pins sit on nodes and fewer than
+/// a quarter sit midway between them (0.4 pitch or more off: no bent pin of
+/// this part stands there). Judged as a whole, not spacing by spacing, so
+/// two neighbours bent apart (a spacing of 1.6 pitch and one of 0.4) do not
+/// make a wrong part.
+pub(super) fn row_fits_lattice(u: &[f64], pitch: f64, tol: f64) -> bool {
+    if u.len() < 3 || !(pitch.is_finite() && pitch > 0.0) {
+        return true;
+    }
+    let tol = tol.min(0.35 * pitch);
+    let res = |u0: f64, x: f64| {
+        let a = (x - u0) / pitch;
+        (a - a.round()) * pitch
+    };
+    let mut best = (0usize, u[0]);
+    for &u0 in u {
+        let n = u.iter().filter(|&&x| res(u0, x).abs() <= tol).count();
+        if n > best.0 {
+            best = (n, u0);
+        }
+    }
+    // Refine the offset to the mean residual of the pins on nodes.
+    let on: Vec<f64> = u
+        .iter()
+        .map(|&x| res(best.1, x))
+        .filter(|r| r.abs() <= tol)
+        .collect();
+    let u0 = best.1 + on.iter().sum::<f64>() / on.len().max(1) as f64;
+    let inl = u.iter().filter(|&&x| res(u0, x).abs() <= tol).count();
+    let between = u
+        .iter()
+        .filter(|&&x| res(u0, x).abs() >= 0.4 * pitch)
+        .count();
+    2 * inl >= u.len() && !(between >= 2 && 4 * between >= u.len())
+}
+
+/// The end of a bar standing up, measured along its axis: see
+/// [`tip_crossing`].
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TipCrossing {
+    /// Half-level crossing near the axis, y px.
+    pub y_in: f64,
+    /// Mean d² of the near-axis samples, px².
+    pub e_in: f64,
+    /// Contour shape y = a + c·d² (c ≥ 0; 0 for a square end).
+    pub c: f64,
+    /// Blur σ from the near-axis profile's 25–75 % rise, px.
+    pub sigma: f64,
+}
+
+impl TipCrossing {
+    /// The tip (y px) for a contour shape `c` and blur `sigma` (the row's
+    /// medians: one part, one focus): the contour's apex moved out by
+    /// σ²·c, the pull of blur on an end of curvature κ = 2c (σ²κ/2).
+    pub fn tip_y(&self, c: f64, sigma: f64) -> f64 {
+        self.y_in - c * self.e_in - sigma * sigma * c
+    }
+}
+
+/// The end of a bar standing up (sign space: bar high), from profiles
+/// along its axis sampled by `sample(d, y)` (d: lateral offset from the
+/// axis, px) over y in [t0, t1] (background first).
+///
+/// A rounded end is curved: the half-level crossing off the axis lies
+/// lower than on it, and blur σ pulls a curved edge's half-level contour
+/// towards its centre of curvature by about σ²κ/2. So the crossing is taken
+/// near the axis (±0.2 of the half-width) and off it (±0.55), the contour
+/// is fitted as y = a + c·d² (κ = 2c, at most that of a radius of half the
+/// half-width), with σ from the near-axis profile's 25–75 % rise (1.349 σ
+/// for a Gaussian edge). One bar's c and σ are noisy; the caller takes the
+/// row's medians ([`TipCrossing::tip_y`]).
+pub(super) fn tip_crossing(
+    sample: &dyn Fn(f64, f64) -> f32,
+    t0: f64,
+    t1: f64,
+    half_w: f64,
+) -> Option<TipCrossing> {
+    const STEP: f64 = 0.25;
+    let n = ((t1 - t0) / STEP) as usize;
+    if n < 20 {
+        return None;
+    }
+    let prof_at = |ds: &[f64]| -> Vec<f32> {
+        (0..=n)
+            .map(|i| {
+                let y = t0 + i as f64 * STEP;
+                ds.iter().map(|&d| sample(d, y)).sum::<f32>() / ds.len() as f32
+            })
+            .collect()
+    };
+    let levels = |p: &[f32]| {
+        let m = p.len();
+        let mut top: Vec<f32> = p[..8].to_vec();
+        let mut bot: Vec<f32> = p[m - 8..].to_vec();
+        (median_f32(&mut top), median_f32(&mut bot))
+    };
+    let half_w = if half_w.is_finite() { half_w } else { 0.0 };
+    let (di, dout) = (0.2 * half_w, 0.55 * half_w);
+    let inner = prof_at(&[-di, 0.0, di]);
+    let (lo, hi) = levels(&inner);
+    let at = |p: &[f32], lo: f32, hi: f32, frac: f32| {
+        first_rise(p, lo + frac * (hi - lo)).map(|f| t0 + f * STEP)
+    };
+    let y_in = at(&inner, lo, hi, 0.5)?;
+    let e_in = 2.0 / 3.0 * di * di;
+    let sigma = match (at(&inner, lo, hi, 0.25), at(&inner, lo, hi, 0.75)) {
+        (Some(a), Some(b)) if b > a => ((b - a) / 1.349).min(half_w.max(1.0)),
+        _ => 0.0,
+    };
+    let mut c = 0.0;
+    if half_w >= 2.0 {
+        let outer = prof_at(&[-dout, dout]);
+        let (lo_o, hi_o) = levels(&outer);
+        if let Some(yo) = at(&outer, lo_o, hi_o, 0.5) {
+            c = ((yo - y_in) / (dout * dout - e_in)).clamp(0.0, 1.0 / half_w);
+        }
+    }
+    Some(TipCrossing {
+        y_in,
+        e_in,
+        c,
+        sigma,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -212,5 +340,80 @@ mod tests {
         let p = super::refine_pitch(&[10.0, 14.5, 30.3], 10.0).unwrap();
         assert!((p - 10.05).abs() < 1e-9, "{p}");
         assert_eq!(super::refine_pitch(&[], 10.0), None);
+    }
+
+    #[test]
+    fn a_row_is_judged_against_its_lattice_as_a_whole() {
+        use super::row_fits_lattice as fits;
+        // Pitch 20 px, ok pins within 1 px; pins 1 and 2 of 5 bent apart
+        // by 0.3 pitch: spacings 14, 32, 14 but the row is this part.
+        assert!(fits(&[0.0, 14.0, 46.0, 60.0, 80.3], 20.0, 3.0));
+        // A part at 1.27 × the pitch: most pins off the nodes.
+        let u: Vec<f64> = (0..10).map(|i| i as f64 * 25.4).collect();
+        assert!(!fits(&u, 20.0, 3.0));
+        // A part at half the pitch: every other pin midway between nodes.
+        let u: Vec<f64> = (0..8).map(|i| i as f64 * 10.0).collect();
+        assert!(!fits(&u, 20.0, 3.0));
+        // Twice the pitch (every other pin missing) is still on the lattice.
+        let u: Vec<f64> = (0..5).map(|i| i as f64 * 40.0 + 0.5).collect();
+        assert!(fits(&u, 20.0, 3.0));
+    }
+
+    #[test]
+    fn a_blurred_rounded_end_is_found_at_its_apex() {
+        // A bar 8 px wide with a semicircular end (apex at y = 20), blurred
+        // with σ = 2 px, sampled on a 0.25 px grid around its axis x = 0.
+        let (r, apex, sigma) = (4.0f64, 20.0f64, 2.0f64);
+        let inside = |x: f64, y: f64| {
+            let yc = apex + r;
+            y >= yc && x.abs() <= r || (x * x + (y - yc) * (y - yc)) <= r * r
+        };
+        // Blurred value by numeric convolution (±3σ, 0.2 px steps).
+        let blurred = |x: f64, y: f64| -> f32 {
+            let (mut s, mut w) = (0.0, 0.0);
+            let n = (3.0 * sigma / 0.2) as i32;
+            for i in -n..=n {
+                for j in -n..=n {
+                    let (dx, dy) = (i as f64 * 0.2, j as f64 * 0.2);
+                    let g = (-(dx * dx + dy * dy) / (2.0 * sigma * sigma)).exp();
+                    w += g;
+                    if inside(x + dx, y + dy) {
+                        s += g;
+                    }
+                }
+            }
+            (100.0 * s / w) as f32
+        };
+        let sample = |d: f64, y: f64| blurred(d, y);
+        let t = super::tip_crossing(&sample, 10.0, 34.0, r).unwrap();
+        let raw = t.y_in - apex;
+        let fixed = t.tip_y(t.c, t.sigma) - apex;
+        // The plain half-level crossing lies inside the end; the corrected
+        // tip is at least twice as close to the apex.
+        assert!(raw > 0.2, "raw crossing {raw:.3} px below the apex");
+        assert!(
+            fixed.abs() < 0.5 * raw,
+            "corrected {fixed:.3} px, raw {raw:.3} px"
+        );
+        // A square end keeps its half-level crossing.
+        let square = |d: f64, y: f64| {
+            let _ = d;
+            (100.0 * 0.5 * (1.0 + libm_erf((y - apex) / (sigma * std::f64::consts::SQRT_2)))) as f32
+        };
+        let t = super::tip_crossing(&square, 10.0, 34.0, r).unwrap();
+        assert!((t.tip_y(t.c, t.sigma) - apex).abs() < 0.05, "{t:?}");
+    }
+
+    /// erf by Abramowitz–Stegun 7.1.26 (|error| < 1.5e-7).
+    fn libm_erf(x: f64) -> f64 {
+        let s = x.signum();
+        let x = x.abs();
+        let t = 1.0 / (1.0 + 0.3275911 * x);
+        let y = 1.0
+            - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t
+                + 0.254829592)
+                * t
+                * (-x * x).exp();
+        s * y
     }
 }
