@@ -46,7 +46,8 @@ fn ci_script_passes_and_writes_every_export() {
     assert!(png.width() >= 500);
     let text = std::fs::read_to_string(out.path().join("signals.txt")).unwrap();
     assert_eq!(text.lines().count(), 24);
-    assert!(text.lines().next().unwrap().contains("2 Signals"));
+    // The tab bar (at 80 columns ten tabs show as `2 Sig`, see tui::draw).
+    assert!(text.lines().next().unwrap().contains("2 Sig"));
     let csv = std::fs::read_to_string(out.path().join("study-by-speed.csv")).unwrap();
     assert!(csv.starts_with("case,clearance_mm,motor_rpm"));
     assert_eq!(csv.lines().count(), 3, "{csv}"); // header + 2 speeds

@@ -132,6 +132,39 @@ fn base(sub: &str, sandbox: &Path) -> Base {
                 vec![],
             )
         }
+        "trend" => (
+            // The calibration cache in the sandbox: after the first run an
+            // option that does not change the calibration costs no fit.
+            vec![p(&log)],
+            vec![
+                o("limit", s("0.8")),
+                o("revs", s("8")),
+                o("out", out("trend")),
+                o("cache", out("trend-cache.json")),
+            ],
+            vec![],
+        ),
+        "merge" => {
+            // Two shards of a one-image yield, made once per sandbox.
+            let shard = |k: u32| sandbox.join(format!("shard-{k}"));
+            for k in 0..2 {
+                if !shard(k).join("partial.json").exists() {
+                    let st = Command::new(BIN)
+                        .args(["yield", &p(&image), "-r", &p(&recipe), "--jobs", "1"])
+                        .args(["--shard", &format!("{k}/2"), "--out", &p(&shard(k))])
+                        .stdout(Stdio::null())
+                        .stderr(Stdio::null())
+                        .status()
+                        .unwrap();
+                    assert!(st.code().is_some_and(|c| c == 0 || c == 3), "shard {k}");
+                }
+            }
+            (
+                vec![p(&shard(0)), p(&shard(1))],
+                vec![o("out", out("merged"))],
+                vec![],
+            )
+        }
         // Without a terminal the TUI refuses after reading its options.
         "tui" => (vec![], vec![], vec![]),
         "render" => (

@@ -216,6 +216,18 @@ pub mod bounds {
         Ok(x as usize)
     }
 
+    /// A clearance limit of the wear trend, mm: above 0 … 10.
+    pub fn clearance_limit_mm(s: &str) -> Result<f64, String> {
+        in_range(s, "clearance limit (mm)", 0.0, 10.0, true)
+    }
+    /// A depth tolerance ± of the wear trend's derived limit, mm: above 0 … 10.
+    pub fn depth_tolerance_mm(s: &str) -> Result<f64, String> {
+        in_range(s, "depth tolerance (mm)", 0.0, 10.0, true)
+    }
+    /// The level of a forecast interval: 0.5 … 0.99.
+    pub fn forecast_level(s: &str) -> Result<f64, String> {
+        in_range(s, "forecast interval level", 0.5, 0.99, false)
+    }
     /// Crank-angle grid points per revolution: 8 (45°) … 7200 (0.05°).
     pub fn points(s: &str) -> Result<usize, String> {
         count(s, "points per revolution", 8, 7200)

@@ -13,7 +13,7 @@ use crate::cli::common::outln;
 use crate::engine::trend::{TrendCache, TrendOptions, run_trend};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::wear::WearModel;
-use anyhow::{anyhow, bail};
+use anyhow::anyhow;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -37,16 +37,16 @@ pub struct Args {
     #[arg(long, default_value = "linear")]
     pub model: String,
     /// The clearance limit (mm), replacing the derivation from a tolerance.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", value_parser = super::common::bounds::clearance_limit_mm)]
     pub limit: Option<f64>,
     /// Depth tolerance ± (mm) the limit is derived from with the model.
-    #[arg(long, value_name = "MM", conflicts_with = "recipe")]
+    #[arg(long, value_name = "MM", conflicts_with = "recipe", value_parser = super::common::bounds::depth_tolerance_mm)]
     pub tolerance: Option<f64>,
     /// A side-view vision recipe: its height_tol_mm is the depth tolerance.
     #[arg(short = 'r', long, value_name = "RECIPE.toml")]
     pub recipe: Option<PathBuf>,
     /// The forecast interval's level (0.5–0.99).
-    #[arg(long, default_value_t = 0.8)]
+    #[arg(long, default_value_t = 0.8, value_parser = super::common::bounds::forecast_level)]
     pub level: f64,
     /// Write trend.json, history.csv, trend.md and trend.png into this folder.
     #[arg(long, value_name = "DIR")]
@@ -66,14 +66,6 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let model = WearModel::parse(&args.model).map_err(anyhow::Error::msg)?;
-    if !(0.5..=0.99).contains(&args.level) {
-        bail!("--level must be within 0.5–0.99 (got {})", args.level);
-    }
-    if let Some(l) = args.limit
-        && !(l.is_finite() && l > 0.0)
-    {
-        bail!("--limit must be a positive clearance in mm (got {l})");
-    }
     let tolerance_mm = match (&args.recipe, args.tolerance) {
         (Some(r), _) => {
             let rec = crate::vision::recipe::Recipe::load(r).map_err(|e| anyhow!("{e}"))?;
@@ -84,9 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 )
             })?)
         }
-        (None, Some(t)) if t.is_finite() && t > 0.0 => Some(t),
-        (None, Some(t)) => bail!("--tolerance must be positive (mm), got {t}"),
-        (None, None) => None,
+        (None, t) => t,
     };
     let mut opts = TrendOptions {
         by_rig: args.by == By::Rig,

@@ -138,7 +138,12 @@ pub fn collect_logs(inputs: &[PathBuf]) -> (Vec<PathBuf>, Vec<ItemError>) {
 }
 
 /// SHA-256 of a file's bytes, in hex.
+/// Only a regular file is hashed (a device such as `/dev/zero` never ends).
 pub fn file_sha256(path: &Path) -> Result<String, String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot open: {e}"))?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
     let mut f = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
     let mut h = Sha256::new();
     std::io::copy(&mut f, &mut h).map_err(|e| format!("cannot read: {e}"))?;

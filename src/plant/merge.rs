@@ -61,6 +61,12 @@ pub fn read_partial(path: &Path) -> Result<YieldPartial, String> {
     } else {
         path.to_path_buf()
     };
+    // A device (`/dev/zero`) never ends: only a regular file is a partial.
+    match std::fs::metadata(&file) {
+        Ok(m) if !m.is_file() => return Err(format!("{}: not a regular file", file.display())),
+        Err(e) => return Err(format!("{}: {e}", file.display())),
+        Ok(_) => {}
+    }
     let bytes = crate::input::read_bounded(&file, PARTIAL_MAX_BYTES)
         .map_err(|e| format!("{}: {e}", file.display()))?;
     let p: YieldPartial = serde_json::from_slice(&bytes)

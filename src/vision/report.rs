@@ -148,13 +148,6 @@ pub(crate) fn group_key(r: &ItemResult, by: GroupBy) -> (String, Option<f64>) {
 }
 
 impl YieldReport {
-    /// Computes the report from the batch results (through their mergeable
-    /// aggregate, [`super::yield_acc::YieldAcc`], so that a report merged
-    /// from shards is this very report).
-    pub fn build(results: &[ItemResult], by: GroupBy) -> YieldReport {
-        super::yield_acc::YieldAcc::of(results, by).report()
-    }
-
     /// Chart panels: Pareto, yield by group, worst positions, and yield
     /// against speed and clearance when known.
     pub fn panels(&self) -> Vec<(String, Panel)> {

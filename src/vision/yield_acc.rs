@@ -340,6 +340,16 @@ impl YieldAcc {
     }
 }
 
+impl YieldReport {
+    /// Computes the report from the batch results (through their mergeable
+    /// aggregate, so that a report merged from shards is this very report).
+    /// Written here, beside the aggregate, so that `report` (the report's
+    /// types and forms) does not import this room.
+    pub fn build(results: &[ItemResult], by: GroupBy) -> YieldReport {
+        YieldAcc::of(results, by).report()
+    }
+}
+
 /// The groups with their yield and interval, by key (by value when every
 /// group has one).
 fn groups(map: &BTreeMap<String, GroupAcc>) -> Vec<GroupYield> {
