@@ -41,15 +41,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(dir) => {
             let files =
                 write_records(dir, rep, &m.items, &m.title, &[]).map_err(anyhow::Error::msg)?;
-            outln!(
-                "merged {} shards: {} items: {} inspected, {} passed, {} failed, {} errors",
-                m.shards,
-                rep.items,
-                rep.inspected,
-                rep.passed,
-                rep.failed,
-                rep.errors
-            )?;
+            outln!("merged {} shards: {}", m.shards, rep.summary_line())?;
             for f in files {
                 outln!("wrote {f}")?;
             }

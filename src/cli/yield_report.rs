@@ -155,25 +155,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             }
             let files = report::write_records(dir, &rep, &records, &title, &extra)
                 .map_err(anyhow::Error::msg)?;
-            let y = rep
-                .yield_frac
-                .map(|y| {
-                    format!(
-                        "{:.2} % (95 % CI {:.2} – {:.2} %)",
-                        100.0 * y,
-                        100.0 * rep.ci95.0,
-                        100.0 * rep.ci95.1
-                    )
-                })
-                .unwrap_or_else(|| "n/a".into());
-            outln!(
-                "{} items: {} inspected, {} passed, {} failed, {} errors; yield {y}",
-                rep.items,
-                rep.inspected,
-                rep.passed,
-                rep.failed,
-                rep.errors
-            )?;
+            outln!("{}", rep.summary_line())?;
             for e in &rep.error_list {
                 outln!("error: {}: {}", e.name, e.message)?;
             }

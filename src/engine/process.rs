@@ -150,12 +150,13 @@ pub fn monitor_logs(
                             items.into_iter().map(YieldInput::Image).collect();
                         (inputs, book)
                     });
-                    let (bands, band_note) = match band {
-                        true => match model_bands(&log, &cs, &progress.child()) {
+                    let (bands, band_note) = if band {
+                        match model_bands(&log, &cs, &progress.child()) {
                             Ok(b) => (b, None),
                             Err(e) => (BTreeMap::new(), Some(format!("no model band: {e}"))),
-                        },
-                        false => (BTreeMap::new(), None),
+                        }
+                    } else {
+                        (BTreeMap::new(), None)
                     };
                     let mut m = monitor_log(
                         recipe,

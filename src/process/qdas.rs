@@ -88,7 +88,9 @@ pub fn dfq_text(run: &MonitorRun) -> String {
             .map(|c| (c.cycle, c))
             .collect();
         for cy in &r.cycles {
-            let mut record: Vec<(usize, f64)> = chars
+            // The process values (characteristics 1 … spc.len()), then the pins'.
+            let mut record: Vec<(usize, f64)> = run
+                .spc
                 .iter()
                 .enumerate()
                 .filter_map(|(i, c)| Some((i + 1, *cy.values.get(&c.name)?)))

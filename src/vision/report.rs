@@ -148,6 +148,25 @@ pub(crate) fn group_key(r: &ItemResult, by: GroupBy) -> (String, Option<f64>) {
 }
 
 impl YieldReport {
+    /// One line for the terminal: counts and the yield with its interval.
+    pub fn summary_line(&self) -> String {
+        let y = self
+            .yield_frac
+            .map(|y| {
+                format!(
+                    "{:.2} % (95 % CI {:.2} – {:.2} %)",
+                    100.0 * y,
+                    100.0 * self.ci95.0,
+                    100.0 * self.ci95.1
+                )
+            })
+            .unwrap_or_else(|| "n/a".into());
+        format!(
+            "{} items: {} inspected, {} passed, {} failed, {} errors; yield {y}",
+            self.items, self.inspected, self.passed, self.failed, self.errors
+        )
+    }
+
     /// Chart panels: Pareto, yield by group, worst positions, and yield
     /// against speed and clearance when known.
     pub fn panels(&self) -> Vec<(String, Panel)> {
