@@ -18,10 +18,11 @@
 //! cut back), in contact the force is max(0, …) of the penetration.
 
 use super::contact::{ContactLaw, ProcessLoad, coulomb};
+use super::joint_model::JointModel;
 use super::kinematics::Geometry;
 use super::kinetostatics::{Inertia, Kinetostatics, cross};
 use super::params::Params;
-use crate::solver::System;
+use crate::solver::{Scale, System, Tolerance};
 use serde::Serialize;
 
 /// |(x, y)| without `hypot`'s overflow guard (glibc's `hypot` was 15 % of a
@@ -54,6 +55,11 @@ pub struct Mode {
 pub struct Outputs {
     pub t: f64,
     pub theta2: f64,
+    /// Crank speed ω2 (rad/s) and acceleration α2 (rad/s²).
+    pub omega2: f64,
+    pub alpha2: f64,
+    /// Torque of the motor at its shaft (N·m); NaN without a motor.
+    pub motor_torque: f64,
     /// Stroke s = x4 − x4_TDC (m), velocity (m/s), acceleration (m/s²).
     pub s: f64,
     pub v4: f64,
@@ -312,6 +318,9 @@ impl ClearanceModel {
         Outputs {
             t,
             theta2,
+            omega2: w,
+            alpha2: 0.0,
+            motor_torque: f64::NAN,
             s,
             v4,
             a4,
@@ -342,24 +351,96 @@ impl ClearanceModel {
     }
 }
 
-/// The model frozen in one contact mode (to rebuild a past step's dense
-/// output after the mode has changed).
-pub struct InMode<'a> {
-    pub model: &'a ClearanceModel,
-    pub mode: Mode,
-}
-
-impl System<DIM> for InMode<'_> {
-    #[inline]
-    fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
-        self.model.evaluate_in(self.mode, t, y, dy);
-    }
-}
+pub use super::joint_model::InMode;
 
 impl System<DIM> for ClearanceModel {
     #[inline]
     fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate(t, y, dy);
+    }
+}
+
+impl JointModel<DIM> for ClearanceModel {
+    const Q_S: usize = Q_S;
+    const Q_DM2: usize = Q_DM2;
+    fn has_joint(&self) -> bool {
+        true
+    }
+    fn mode(&self) -> Mode {
+        self.mode
+    }
+    fn set_mode(&mut self, mode: Mode) {
+        self.mode = mode;
+    }
+    fn set_quadratures(&mut self, on: bool) {
+        self.quadratures = on;
+    }
+    fn clearance(&self) -> f64 {
+        self.clearance
+    }
+    fn rb(&self) -> f64 {
+        self.rb
+    }
+    fn x4_tdc(&self) -> f64 {
+        self.x4_tdc
+    }
+    fn tolerance(&self, rtol: f64, atol: f64) -> Tolerance<DIM> {
+        tolerance(self.clearance, self.geom.l, rtol, atol)
+    }
+    fn initial_state(&self, dx4: f64) -> [f64; DIM] {
+        ClearanceModel::initial_state(self, dx4)
+    }
+    #[inline]
+    fn theta2(&self, t: f64, _y: &[f64; DIM]) -> f64 {
+        ClearanceModel::theta2(self, t)
+    }
+    #[inline]
+    fn penetration(&self, t: f64, y: &[f64; DIM]) -> (f64, f64) {
+        ClearanceModel::penetration(self, t, y)
+    }
+    fn relative_speed(&self, t: f64, y: &[f64; DIM]) -> f64 {
+        ClearanceModel::relative_speed(self, t, y)
+    }
+    #[inline]
+    fn deviation(&self, t: f64, y: &[f64; DIM]) -> (f64, f64) {
+        let (x, v) = self.ideal_x4_v4(t);
+        (y[X4] - x, y[V4] - v)
+    }
+    fn onset_step(&self, approach: f64, tol_pos: f64) -> f64 {
+        ClearanceModel::onset_step(self, approach, tol_pos)
+    }
+    fn accel_scale(&self) -> f64 {
+        ClearanceModel::accel_scale(self)
+    }
+    #[inline]
+    fn outputs_in(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Outputs {
+        ClearanceModel::outputs_in(self, mode, t, y)
+    }
+    #[inline]
+    fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        self.evaluate_in(mode, t, y, dy);
+    }
+    fn crank_speed(&self, _y: &[f64; DIM]) -> Option<f64> {
+        None
+    }
+}
+
+/// The integrator's tolerance for a clearance model: positions judged at
+/// the scale of the clearance (θ3 through the rod length), velocities
+/// relative, quadratures not controlled.
+pub fn tolerance(clearance: f64, l: f64, rtol: f64, atol: f64) -> Tolerance<DIM> {
+    let cref = clearance.max(1e-9);
+    Tolerance {
+        rtol,
+        atol: [atol / l, atol / l, atol, atol, 0.0, 0.0],
+        scale: [
+            Scale::Fixed(cref / l),
+            Scale::Relative,
+            Scale::Fixed(cref),
+            Scale::Relative,
+            Scale::Ignore,
+            Scale::Ignore,
+        ],
     }
 }
 

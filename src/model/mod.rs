@@ -4,6 +4,7 @@ pub mod choices;
 pub mod clearance;
 
 pub mod contact;
+pub mod joint_model;
 pub mod kinematics;
 pub mod kinetostatics;
 pub mod materials;

@@ -17,11 +17,12 @@ use super::summary::{
     NQ, PeakTracker, Q_ACC, Q_DS, Q_DV, Q_FN, Q_M12, Q_PEN, Q_PROC, Q_SMAX, Q_SMIN, quantities,
 };
 use super::{ContactEvent, Curves, SimError, SimOptions, SimResult, Summary, wrap_deg};
-use crate::model::clearance::{ClearanceModel, DIM, InMode, Mode, Q_DM2, Q_S, V4, X4};
+use crate::model::clearance::{ClearanceModel, Mode};
+use crate::model::joint_model::{InMode, JointModel};
 use crate::model::params::Params;
 use crate::progress::Progress;
 use crate::solver::roots::{bracket_root, maximize};
-use crate::solver::{Method, Scale, StepError, Stepper, StepperConfig, Tolerance};
+use crate::solver::{Method, StepError, Stepper, StepperConfig};
 use std::time::Instant;
 
 /// Points per free-flight step at which δ and δ̇ are sampled on the dense
@@ -33,8 +34,8 @@ pub const RK4_STEPS_PER_REV: f64 = 20_000.0;
 
 /// One integration segment kept for peak refinement.
 #[derive(Clone)]
-struct Segment {
-    st: Stepper<DIM>,
+struct Segment<const N: usize> {
+    st: Stepper<N>,
     ta: f64,
     tb: f64,
     mode: Mode,
@@ -110,35 +111,15 @@ impl AbsIntegral {
     }
 }
 
-/// The integrator's tolerance for the clearance model: positions judged at
-/// the scale of the clearance (θ3 through the rod length), velocities
-/// relative, quadratures not controlled.
-pub fn tolerance(p: &Params, rtol: f64, atol: f64) -> Tolerance<DIM> {
-    let cref = p.clearance.max(1e-9);
-    let l = p.l;
-    Tolerance {
-        rtol,
-        atol: [atol / l, atol / l, atol, atol, 0.0, 0.0],
-        scale: [
-            Scale::Fixed(cref / l),
-            Scale::Relative,
-            Scale::Fixed(cref),
-            Scale::Relative,
-            Scale::Ignore,
-            Scale::Ignore,
-        ],
-    }
-}
-
-struct Runner<'a> {
-    model: ClearanceModel,
-    st: Stepper<DIM>,
+struct Runner<'a, M: JointModel<N>, const N: usize> {
+    model: M,
+    st: Stepper<N>,
     opts: &'a SimOptions,
     t_rep: f64,
     t_end: f64,
     aux_evals: u64,
     tracker: PeakTracker,
-    prev_seg: Option<Segment>,
+    prev_seg: Option<Segment<N>>,
     curves: Option<Curves>,
     grid_dt: f64,
     grid_next: usize,
@@ -152,15 +133,17 @@ struct Runner<'a> {
     abs_v: AbsIntegral,
     /// (Δs, Δv, Δa) at the last segment boundary.
     last_dev: (f64, f64, f64),
+    /// Time and state where the reported window began.
+    window_start: (f64, [f64; N]),
 }
 
-impl Runner<'_> {
+impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
     fn in_report(&self, t: f64) -> bool {
         t >= self.t_rep
     }
 
     /// Handles the finished segment [ta, tb] of the current step, run in `mode`.
-    fn finish_segment(&mut self, ta: f64, tb: f64, y_b: &[f64; DIM], mode: Mode) {
+    fn finish_segment(&mut self, ta: f64, tb: f64, y_b: &[f64; N], mode: Mode) {
         if !self.in_report(ta) || tb <= ta {
             return;
         }
@@ -211,13 +194,13 @@ impl Runner<'_> {
             let m = &self.model;
             let ds = |t: f64| {
                 let y = st.dense(t);
-                y[X4] - m.ideal_x4_v4(t).0
+                m.deviation(t, &y).0
             };
             let dv = |t: f64| {
                 let y = st.dense(t);
-                y[V4] - m.ideal_x4_v4(t).1
+                m.deviation(t, &y).1
             };
-            let qs = |t: f64| st.dense(t)[Q_S];
+            let qs = |t: f64| st.dense(t)[M::Q_S];
             self.abs_s.segment(
                 ta,
                 tb,
@@ -264,7 +247,7 @@ impl Runner<'_> {
         }
     }
 
-    fn record_event(&mut self, onset: bool, t: f64, dd: f64, delta: f64) {
+    fn record_event(&mut self, onset: bool, t: f64, y: &[f64; N], dd: f64, delta: f64) {
         self.n_events += 1;
         let in_report = self.in_report(t);
         if onset && in_report {
@@ -274,11 +257,42 @@ impl Runner<'_> {
             self.events.push(ContactEvent {
                 onset,
                 t_s: t,
-                crank_deg: wrap_deg(self.model.theta2(t)),
+                crank_deg: wrap_deg(self.model.theta2(t, y)),
                 delta_dot_mps: dd,
-                residual_rel: delta.abs() / self.model.clearance,
+                residual_rel: delta.abs() / self.model.clearance(),
                 in_report,
             });
+        }
+    }
+
+    /// The crank stopped on the last step [t0, t1] (ω2 > 0 at t0, ≤ 0 at
+    /// t1): the stop located on the dense output, said as a crank angle
+    /// after top dead centre and a revolution.
+    fn stall(&mut self, t0: f64, t1: f64, theta_start: f64) -> SimError {
+        let mode = self.model.mode();
+        self.st.prepare_dense(&InMode {
+            model: &self.model,
+            mode,
+        });
+        let st = &self.st;
+        let m = &self.model;
+        let w = |t: f64| m.crank_speed(&st.dense(t)).unwrap_or(0.0);
+        let (w0, w1) = (w(t0), w(t1));
+        let (ts, _, _) = if w0 > 0.0 && w1 <= 0.0 {
+            bracket_root(w, t0, w0, t1, w1, (t1 - t0) * 1e-9, |_| false)
+        } else {
+            (t1, w1, 0)
+        };
+        let ys = self.st.dense(ts);
+        let o = self.model.outputs(ts, &ys);
+        let turned = (self.model.theta2(ts, &ys) - theta_start).max(0.0);
+        let tau = std::f64::consts::TAU;
+        SimError::Stall {
+            t: ts,
+            crank_deg: (turned.rem_euclid(tau)).to_degrees(),
+            revolution: (turned / tau).floor() as u64 + 1,
+            motor_torque_nm: o.motor_torque,
+            demand_nm: o.m12,
         }
     }
 
@@ -288,9 +302,9 @@ impl Runner<'_> {
         SimError::Integration {
             source,
             t,
-            crank_deg: wrap_deg(self.model.theta2(t)),
+            crank_deg: wrap_deg(self.model.theta2(t, self.st.y())),
             penetration_um: delta * 1e6,
-            mode: if self.model.mode.in_contact {
+            mode: if self.model.mode().in_contact {
                 "in contact"
             } else {
                 "in free flight"
@@ -301,24 +315,34 @@ impl Runner<'_> {
 
 /// Starts the reported window at (t, y): peak tracker, |Δ| integrals;
 /// returns the ΔM² quadrature's value there.
-fn start_window(r: &mut Runner, t: f64, y: &[f64; DIM]) -> f64 {
+fn start_window<M: JointModel<N>, const N: usize>(
+    r: &mut Runner<M, N>,
+    t: f64,
+    y: &[f64; N],
+) -> f64 {
     let o = r.model.outputs(t, y);
     r.aux_evals += 1;
     r.tracker.start(t, quantities(&o));
+    r.window_start = (t, *y);
     r.last_dev = (o.s - o.ideal_s, o.v4 - o.ideal_v, o.a4 - o.ideal_a);
     r.abs_s = AbsIntegral {
         total: 0.0,
-        piece_start: y[Q_S],
+        piece_start: y[M::Q_S],
     };
     r.abs_v = AbsIntegral {
         total: 0.0,
         piece_start: o.s - o.ideal_s,
     };
-    y[Q_DM2]
+    y[M::Q_DM2]
 }
 
 /// Maximises quantity q over a stored segment with its dense output.
-fn refine_in(model: &ClearanceModel, seg: &mut Segment, q: usize, evals: &mut u64) -> f64 {
+fn refine_in<M: JointModel<N>, const N: usize>(
+    model: &M,
+    seg: &mut Segment<N>,
+    q: usize,
+    evals: &mut u64,
+) -> f64 {
     seg.st.prepare_dense(&InMode {
         model,
         mode: seg.mode,
@@ -338,10 +362,51 @@ fn refine_in(model: &ClearanceModel, seg: &mut Segment, q: usize, evals: &mut u6
 }
 
 pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResult, SimError> {
-    let start = Instant::now();
     let model = ClearanceModel::new(p);
-    let period = p.period();
-    let c = p.clearance;
+    let how = RunSetup {
+        ideal: p,
+        period: p.period(),
+        omega: p.omega(),
+        level: "clearance",
+    };
+    run_model(p, opts, model, &how, progress).map(|f| f.result)
+}
+
+/// What differs between the levels that run through [`run_model`].
+pub(crate) struct RunSetup<'a> {
+    /// The parameters of the ideal mechanism the figures compare with.
+    pub ideal: &'a Params,
+    /// The crank period (s) and speed (rad/s) that set the protocol's
+    /// window and the curves' grid.
+    pub period: f64,
+    pub omega: f64,
+    /// The level's name in the summary.
+    pub level: &'static str,
+}
+
+/// A finished run with the states at the window's ends (for the figures a
+/// level adds from its own quadratures).
+pub(crate) struct Finished<const N: usize> {
+    pub result: SimResult,
+    /// Time and state at the start of the reported window.
+    pub window_start: (f64, [f64; N]),
+    /// Time and state at the end.
+    pub end: (f64, [f64; N]),
+    /// The continuous-time maxima of the tracked quantities.
+    pub best: [f64; NQ],
+}
+
+/// The event-located integration of any [`JointModel`] over the protocol.
+pub(crate) fn run_model<M: JointModel<N>, const N: usize>(
+    p: &Params,
+    opts: &SimOptions,
+    model: M,
+    how: &RunSetup,
+    progress: &Progress,
+) -> Result<Finished<N>, SimError> {
+    let start = Instant::now();
+    let period = how.period;
+    let c = model.clearance();
     let t_rep = opts.warmup * period;
     let t_end = (opts.warmup + opts.revs) * period;
     let fixed_step = match (opts.step, opts.method) {
@@ -350,7 +415,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         _ => None,
     };
     let cfg = StepperConfig {
-        tol: tolerance(p, opts.rtol, opts.atol),
+        tol: model.tolerance(opts.rtol, opts.atol),
         h: fixed_step.unwrap_or(0.0),
         h_max: f64::INFINITY,
         max_steps: opts.max_steps,
@@ -359,7 +424,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
     let st = Stepper::new(opts.method, cfg);
     let grid = opts.grid_deg.map(|g| {
         let n = (opts.revs * 360.0 / g + 1e-9).floor() as usize;
-        (g.to_radians() / model.omega, n)
+        (g.to_radians() / how.omega, n)
     });
     let mut r = Runner {
         model,
@@ -381,12 +446,13 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         abs_s: AbsIntegral::default(),
         abs_v: AbsIntegral::default(),
         last_dev: (0.0, 0.0, 0.0),
+        window_start: (0.0, [0.0; N]),
     };
     // Rounding noise of δ = |P − B| − c evaluated from a (dense) state: a few
     // ulps of the positions. Events are placed at δ = ±2·floor on the new
     // side, so that noise cannot put the restart point back on the old one,
     // and never further than the spec's 1e-5·c.
-    let noise_floor = 8.0 * f64::EPSILON * (p.l + p.r + r.model.x4_tdc);
+    let noise_floor = 8.0 * f64::EPSILON * (p.l + p.r + r.model.x4_tdc());
     let ev_tol = (opts.event_tol * c).max(4.0 * noise_floor).min(1e-5 * c);
     let ev_target = (2.0 * noise_floor).min(0.5 * ev_tol);
     let a_ref = r.model.accel_scale();
@@ -394,7 +460,8 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
 
     let mut t = 0.0;
     let mut y = r.model.initial_state(opts.perturb_x4);
-    r.model.quadratures = t_rep == 0.0;
+    let theta_start = r.model.theta2(t, &y);
+    r.model.set_quadratures(t_rep == 0.0);
     r.st.reset(&r.model, t, y, true);
     let mut pen = r.model.penetration(t, &y);
     let mut q_start = 0.0;
@@ -404,18 +471,19 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
     progress.set_total(1000);
     let mut iter: u64 = 0;
     let (mut contact_steps, mut free_steps) = (0u64, 0u64);
-    let budget = |t: f64, what: String| SimError::Budget {
+    let budget = |t: f64, theta2: f64, what: String| SimError::Budget {
         t,
-        crank_deg: wrap_deg(ClearanceModel::new(p).theta2(t)),
+        crank_deg: wrap_deg(theta2),
         what,
     };
     // Projected work: free flight never steps further than
     // `free_limit_acc`, so a clearance far below any real joint needs more
     // steps than the budget allows; say so now rather than after minutes.
     let min_free_steps = (t_end - t) / free_limit_acc;
-    if !(min_free_steps <= opts.max_steps as f64) {
+    if r.model.has_joint() && !(min_free_steps <= opts.max_steps as f64) {
         return Err(budget(
             t,
+            theta_start,
             format!(
                 "the free-flight step limit √(4c/a) = {:.3e} s needs ≥ {:.3e} steps for {:.3} revolutions (budget {})",
                 free_limit_acc,
@@ -436,12 +504,14 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             if wall > opts.max_wall_s {
                 return Err(budget(
                     t,
+                    r.model.theta2(t, &y),
                     format!("{wall:.1} s of wall time (budget {} s)", opts.max_wall_s),
                 ));
             }
             if super::process_deadline().is_some_and(|d| std::time::Instant::now() > d) {
                 return Err(budget(
                     t,
+                    r.model.theta2(t, &y),
                     "the process's wall time (PINSIGHT_MAX_WALL_S)".to_string(),
                 ));
             }
@@ -451,6 +521,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         if iter > opts.max_steps {
             return Err(budget(
                 t,
+                r.model.theta2(t, &y),
                 format!(
                     "{iter} steps and event restarts (budget {})",
                     opts.max_steps
@@ -458,8 +529,10 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             ));
         }
         let stop = if t < t_rep { t_rep } else { t_end };
-        let in_contact = r.model.mode.in_contact;
-        let h_max = if in_contact {
+        let in_contact = r.model.mode().in_contact;
+        let h_max = if !r.model.has_joint() {
+            f64::INFINITY
+        } else if in_contact {
             // Separating: do not reach far past the linearly predicted loss
             // of contact (the force vanishes like δ^1.5 there).
             // Floored at the step the contact law itself allows, so a grazing
@@ -481,6 +554,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         if !(t1 > t0) {
             return Err(budget(
                 t0,
+                r.model.theta2(t0, &y),
                 "no progress: the step fell below the resolution of time (h ≤ 1 ulp of t)".into(),
             ));
         }
@@ -490,14 +564,19 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             free_steps += 1;
         }
         let y1 = *r.st.y();
+        if let Some(w1) = r.model.crank_speed(&y1)
+            && !(w1 > 0.0)
+        {
+            return Err(r.stall(t0, t1, theta_start));
+        }
         let pen1 = r.model.penetration(t1, &y1);
         let (d0, dd0) = pen;
         let (d1, dd1) = pen1;
-        if !(d1 < r.model.rb) {
+        if !(d1 < r.model.rb()) {
             // Deeper than the journal itself (or NaN): not physics any more.
             return Err(SimError::BlowUp {
                 t: t1,
-                crank_deg: wrap_deg(r.model.theta2(t1)),
+                crank_deg: wrap_deg(r.model.theta2(t1, &y1)),
                 penetration_um: d1 * 1e6,
             });
         }
@@ -505,12 +584,14 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         // flight, loss (δ down through 0) in contact.
         // crossing = (ta, g(ta), tb, g(tb)) bracketing the event.
         let mut crossing: Option<(f64, f64, f64, f64)> = None;
-        if in_contact {
+        if !r.model.has_joint() {
+            // No joint, no contact events.
+        } else if in_contact {
             if d1 < 0.0 {
                 crossing = Some((t0, d0, t1, d1));
             } else if dd0 < 0.0 && dd1 > 0.0 {
                 // δ turned inside the step: did it dip below zero?
-                let mode = r.model.mode;
+                let mode = r.model.mode();
                 r.st.prepare_dense(&InMode {
                     model: &r.model,
                     mode,
@@ -537,7 +618,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             // (a double crossing, possibly after a minimum and a maximum
             // of δ) is seen: a positive sample, or δ̇ turning from + to −
             // in a sub-interval whose maximum is positive.
-            let mode = r.model.mode;
+            let mode = r.model.mode();
             r.st.prepare_dense(&InMode {
                 model: &r.model,
                 mode,
@@ -580,7 +661,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             }
         }
         if let Some((ta, ga, tb, gb)) = crossing {
-            let mode = r.model.mode;
+            let mode = r.model.mode();
             r.st.prepare_dense(&InMode {
                 model: &r.model,
                 mode,
@@ -616,17 +697,17 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
             let _ = ge;
             r.finish_segment(t0, te, &ye, mode);
             if in_contact {
-                r.model.mode = Mode {
+                r.model.set_mode(Mode {
                     in_contact: false,
                     approach: 0.0,
-                };
-                r.record_event(false, te, dde, de);
+                });
+                r.record_event(false, te, &ye, dde, de);
             } else {
-                r.model.mode = Mode {
+                r.model.set_mode(Mode {
                     in_contact: true,
                     approach: dde,
-                };
-                r.record_event(true, te, dde, de);
+                });
+                r.record_event(true, te, &ye, dde, de);
             }
             if r.n_events > 10_000 * (te / period + 1.0) as u64 {
                 return Err(SimError::EventStorm(r.n_events));
@@ -639,7 +720,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
                 r.st.set_next_step(0.5 * r.model.onset_step(dde, opts.rtol * c + opts.atol));
             }
         } else {
-            let mode = r.model.mode;
+            let mode = r.model.mode();
             r.finish_segment(t0, t1, &y1, mode);
             t = t1;
             y = y1;
@@ -648,7 +729,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         if t == t_rep && !r.tracker.started() {
             // Reported window: turn the quadratures on and restart the
             // stepper so its first-stage derivative includes them.
-            r.model.quadratures = true;
+            r.model.set_quadratures(true);
             r.st.reset(&r.model, t, y, false);
             q_start = start_window(&mut r, t, &y);
         }
@@ -658,7 +739,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
     let tw = t_end - t_rep;
     let best = r.tracker.best;
     let ideal = super::ideal_run::run(
-        p,
+        how.ideal,
         &SimOptions {
             level: super::Level::Ideal,
             grid_deg: None,
@@ -684,7 +765,7 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         clearance_mm: c * 1e3,
         material: p.material_name(),
         contact_model: p.contact_model.name().into(),
-        level: "clearance".into(),
+        level: how.level.into(),
         method: opts.method.name().into(),
         rtol: opts.rtol,
         atol: opts.atol,
@@ -701,12 +782,12 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         n_impacts: r.n_impacts,
         peak_accel_mps2: best[Q_ACC],
         peak_contact_force_n: best[Q_FN],
-        disp_dev_mean_mm: r.abs_s.finish(y[Q_S]) / tw * 1e3,
+        disp_dev_mean_mm: r.abs_s.finish(y[M::Q_S]) / tw * 1e3,
         disp_dev_max_mm: best[Q_DS] * 1e3,
-        vel_dev_mean_mps: r.abs_v.finish(y[X4] - r.model.ideal_x4_v4(t).0) / tw,
+        vel_dev_mean_mps: r.abs_v.finish(r.model.deviation(t, &y).0) / tw,
         vel_dev_max_mps: best[Q_DV],
         peak_torque_nm: Some(best[Q_M12]),
-        torque_dev_rms_nm: Some(((y[Q_DM2] - q_start) / tw).max(0.0).sqrt()),
+        torque_dev_rms_nm: Some(((y[M::Q_DM2] - q_start) / tw).max(0.0).sqrt()),
         stroke_min_mm: -best[Q_SMIN] * 1e3,
         stroke_max_mm: best[Q_SMAX] * 1e3,
         peak_process_force_n: Some(best[Q_PROC]),
@@ -717,12 +798,17 @@ pub fn run(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResu
         contact_steps,
         free_steps,
     };
-    Ok(SimResult {
-        summary,
-        curves: r.curves,
-        events: r.events,
-        stats,
-        notes,
+    Ok(Finished {
+        result: SimResult {
+            summary,
+            curves: r.curves,
+            events: r.events,
+            stats,
+            notes,
+        },
+        window_start: r.window_start,
+        end: (t, y),
+        best,
     })
 }
 

@@ -19,6 +19,9 @@ pub fn ideal_outputs(ks: &Kinetostatics, theta0: f64, omega: f64, t: f64) -> Out
     Outputs {
         t,
         theta2,
+        omega2: omega,
+        alpha2: 0.0,
+        motor_torque: f64::NAN,
         s,
         v4: f.pose.v4,
         a4: f.pose.a4,

@@ -278,6 +278,20 @@ pub enum SimError {
         "the run produced a non-finite {0} (NaN or infinite): no figure is reported; check the parameters (values far from any real mechanism)"
     )]
     NonFinite(&'static str),
+    #[error(
+        "the motor stalls at {crank_deg:.0}° of crank angle (after top dead centre) in revolution {revolution} (t = {t:.4} s): the motor gives {motor_torque_nm:.3} N·m at standstill where the mechanism demands {demand_nm:.3} N·m at the crank — a stronger motor, a larger flywheel or a higher gear ratio is needed"
+    )]
+    Stall {
+        t: f64,
+        /// Crank angle after top dead centre where the crank stopped, degrees.
+        crank_deg: f64,
+        /// The revolution (1 = the first) in which it stopped.
+        revolution: u64,
+        /// Motor torque at its shaft at the stop, N·m.
+        motor_torque_nm: f64,
+        /// Drive torque the mechanism demanded at the crank at the stop, N·m.
+        demand_nm: f64,
+    },
     #[error("cancelled")]
     Cancelled,
 }

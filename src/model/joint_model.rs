@@ -1,0 +1,75 @@
+//! What the event-located integration loop (`sim::clearance_run`) needs of
+//! a model: one trait for the constant-speed clearance model (level
+//! `clearance`) and the motor-driven models (level `motor`, with or without
+//! clearance), so that contact events, the double-crossing guard, peaks,
+//! curves, budgets and the stall event are written once.
+//!
+//! The state's layout is the model's own; the loop reaches into it only
+//! through these methods and the two quadrature indices.
+
+use super::clearance::{Mode, Outputs};
+use crate::solver::Tolerance;
+
+/// A mechanism model integrated by the event loop.
+pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
+    /// Index of the quadrature Q_s = ∫(s − s_ideal) dt in the state.
+    const Q_S: usize;
+    /// Index of the quadrature Q_M = ∫(M12 − M12_ideal)² dt.
+    const Q_DM2: usize;
+
+    /// Whether the rod–pin-bar joint has a clearance (contact events). A
+    /// model without one never leaves free flight and takes no step limit.
+    fn has_joint(&self) -> bool;
+    fn mode(&self) -> Mode;
+    fn set_mode(&mut self, mode: Mode);
+    /// Turns the quadratures (and the ideal mechanism they compare with) on
+    /// or off (off during warm-up, where nothing is reported).
+    fn set_quadratures(&mut self, on: bool);
+    /// Radial clearance c (m) and bearing radius R_B (m).
+    fn clearance(&self) -> f64;
+    fn rb(&self) -> f64;
+    /// x4 at top dead centre (m).
+    fn x4_tdc(&self) -> f64;
+    /// The integrator's tolerance: positions at the scale of the clearance.
+    fn tolerance(&self, rtol: f64, atol: f64) -> Tolerance<N>;
+    /// Start state: journal centred, ideal velocities, the pin bar moved by `dx4`.
+    fn initial_state(&self, dx4: f64) -> [f64; N];
+    /// Crank angle θ2 (rad) at (t, y).
+    fn theta2(&self, t: f64, y: &[f64; N]) -> f64;
+    /// Penetration δ and its rate (m, m/s); cheap (no forces).
+    fn penetration(&self, t: f64, y: &[f64; N]) -> (f64, f64);
+    /// |v_P − v_B| (m/s), for the free-flight step limit.
+    fn relative_speed(&self, t: f64, y: &[f64; N]) -> f64;
+    /// Stroke and speed deviations from the ideal mechanism at the same
+    /// crank angle (and crank speed): (s − s_ideal, v4 − v_ideal).
+    fn deviation(&self, t: f64, y: &[f64; N]) -> (f64, f64);
+    /// A first step after a contact onset (see `ClearanceModel::onset_step`).
+    fn onset_step(&self, approach: f64, tol_pos: f64) -> f64;
+    /// Scale of the crank-driven relative acceleration (m/s²).
+    fn accel_scale(&self) -> f64;
+    /// Everything at one instant in a given contact mode.
+    fn outputs_in(&self, mode: Mode, t: f64, y: &[f64; N]) -> Outputs;
+    /// The right-hand side in a given contact mode.
+    fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; N], dy: &mut [f64; N]);
+    /// The crank's speed ω2 (rad/s) when it is free (a motor drives it):
+    /// the run stops with a stall when it reaches zero. None at constant speed.
+    fn crank_speed(&self, y: &[f64; N]) -> Option<f64>;
+
+    fn outputs(&self, t: f64, y: &[f64; N]) -> Outputs {
+        self.outputs_in(self.mode(), t, y)
+    }
+}
+
+/// A model frozen in one contact mode (to rebuild a past step's dense
+/// output after the mode has changed).
+pub struct InMode<'a, M> {
+    pub model: &'a M,
+    pub mode: Mode,
+}
+
+impl<M: JointModel<N>, const N: usize> crate::solver::System<N> for InMode<'_, M> {
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        self.model.rhs_in(self.mode, t, y, dy);
+    }
+}
