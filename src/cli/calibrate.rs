@@ -44,6 +44,10 @@ pub struct Args {
     /// Crank-angle grid points per revolution.
     #[arg(long, default_value_t = 720, value_parser = super::common::bounds::points)]
     pub points: usize,
+    /// Also fit the flywheel inertia to the crank speed ripple (the motor
+    /// level); the parameter file then says driver = "motor".
+    #[arg(long)]
+    pub flywheel: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -70,6 +74,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         calibrate(&log, &cs, &base, &opts, &progress)?
     };
     report.notes.splice(0..0, notes);
+    if args.flywheel {
+        let fit = crate::overlay::calibrate::flywheel::calibrate_flywheel(&cs, &report.params)
+            .map_err(|e| anyhow!(e))?;
+        crate::overlay::calibrate::flywheel::apply_to_report(&mut report, &fit);
+    }
     if let Some(path) = &args.out {
         crate::output::write_file(path, report.params_toml.as_bytes())?;
     }

@@ -18,7 +18,7 @@ use std::process::ExitCode;
 pub struct Args {
     #[command(flatten)]
     pub params: ParamArgs,
-    /// Fidelity level: auto (cheapest sufficient), kinematic, ideal or clearance.
+    /// Fidelity level: auto (cheapest sufficient), kinematic, ideal, clearance or motor.
     #[arg(long, default_value = "clearance")]
     pub level: String,
     #[command(flatten)]
@@ -63,7 +63,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let method = args.solver.method()?;
     let choice = LevelChoice::parse(&args.level).ok_or_else(|| {
         anyhow!(
-            "invalid --level `{}` (allowed: auto, kinematic, ideal, clearance)",
+            "invalid --level `{}` (allowed: auto, kinematic, ideal, clearance, motor)",
             args.level
         )
     })?;
@@ -101,12 +101,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "simulate"));
     let result = simulate(&p, &opts, &progress)?;
     let ensemble = match args.ensemble {
-        Some(n) if n > 1 && level == Level::Clearance => {
+        Some(n) if n > 1 && matches!(level, Level::Clearance | Level::Motor) => {
             Some(run_ensemble(&p, &opts, n, 1e-9, args.horizon, &progress)?)
         }
         _ => None,
     };
-    let horizon = match (&ensemble, args.horizon && level == Level::Clearance) {
+    let horizon = match (
+        &ensemble,
+        args.horizon && matches!(level, Level::Clearance | Level::Motor),
+    ) {
         (Some(e), _) => e.horizon,
         (None, true) => Some(crate::sim::ensemble::prediction_horizon(&p, &opts, 1e-9)?),
         _ => None,
@@ -223,7 +226,7 @@ fn write_text<W: Write>(
         "pinsight simulate — preset {}, level {} ({}), {} rpm, clearance {:.3} mm, {}, {} (ce {})",
         s.preset,
         s.level,
-        if s.level == "clearance" {
+        if s.level == "clearance" || s.level == "motor" {
             format!("{} rtol {:.0e}", s.method, s.rtol)
         } else {
             "closed form".into()
@@ -315,6 +318,9 @@ fn write_text<W: Write>(
         fmt_opt(s.peak_process_force_n, 3),
         "".into(),
     )?;
+    if let Some(m) = &s.motor {
+        write_motor(out, m)?;
+    }
     writeln!(
         out,
         "work: {} steps ({} rejected), {} rhs + {} aux evaluations, {:.2} ms",
@@ -358,6 +364,59 @@ fn write_text<W: Write>(
         writeln!(out, "note: {n}")?;
     }
     Ok(())
+}
+
+/// The motor level's figures: speed and ripple, the motor's duty, and
+/// where its work went.
+fn write_motor<W: Write>(
+    out: &mut W,
+    m: &crate::sim::motor_run::MotorSummary,
+) -> std::io::Result<()> {
+    let opt = |v: Option<f64>, d: usize| v.map_or("–".to_string(), |x| format!("{x:.d$}"));
+    writeln!(
+        out,
+        "motor ({} curve, speed control {}): drive inertia {:.3e} kg m² at the crank{}",
+        m.curve,
+        m.control,
+        m.drive_inertia_kgm2,
+        m.no_load_rpm
+            .map(|n| format!(", no-load speed {n:.1} rev/min"))
+            .unwrap_or_default()
+    )?;
+    writeln!(
+        out,
+        "  crank speed {:.2} rev/min mean ({:.2} … {:.2}; operating point {:.2})",
+        m.mean_crank_rpm, m.min_crank_rpm, m.max_crank_rpm, m.operating_crank_rpm
+    )?;
+    writeln!(
+        out,
+        "  speed ripple {:.3} % peak-to-peak, first harmonic {} % (peak at {}° after TDC)",
+        m.ripple_p2p_pct,
+        opt(m.ripple_h1_pct, 3),
+        opt(m.ripple_h1_phase_deg, 0)
+    )?;
+    writeln!(
+        out,
+        "  motor torque peak {:.4} N·m, RMS {:.4} N·m (curve at the mean speed {:.4} N·m), mean power {:.3} W",
+        m.peak_motor_torque_nm,
+        m.rms_motor_torque_nm,
+        m.curve_torque_at_mean_nm,
+        m.mean_motor_power_w
+    )?;
+    let e = &m.energy;
+    writeln!(
+        out,
+        "  energy (J): motor {:.6} = process {:.6} + guide {:.6} + impacts/joint {:.6} + gear {:.6} + Δkinetic {:.6} + Δpotential {:.6} + Δelastic {:.2e} (residual {:.1e})",
+        e.motor_work_j,
+        e.process_work_j,
+        e.guide_friction_j,
+        e.impact_and_joint_friction_j,
+        e.gear_loss_j,
+        e.kinetic_change_j,
+        e.potential_change_j,
+        e.elastic_change_j,
+        e.residual_j
+    )
 }
 
 /// `pinsight` with no arguments (no TTY): the demo summary — the paper

@@ -50,7 +50,8 @@ impl ContactModel {
 pub enum ProcessLaw {
     /// Smoothed like friction with the c_d ramp (default).
     Regularized,
-    /// Set-valued stick law (optional refinement; not implemented yet).
+    /// Set-valued stick law: the pin bar is held at rest while the other
+    /// forces stay within −F_wd … F_ins (stick/slip located as events).
     Stick,
 }
 
@@ -69,9 +70,8 @@ impl ProcessLaw {
 pub enum Driver {
     /// θ2 = θ0 + ω t (default).
     ConstantSpeed,
-    /// A motor with torque–speed curve and flywheel (the `motor` level; not
-    /// implemented yet — the driver is a parameter so the level can be added
-    /// without changing the file format).
+    /// A motor with torque–speed curve, gear and flywheel: θ2 is free
+    /// (the `motor` level; the lower levels run at its operating speed).
     Motor,
 }
 
@@ -80,6 +80,60 @@ impl Driver {
         match self {
             Driver::ConstantSpeed => "constant_speed",
             Driver::Motor => "motor",
+        }
+    }
+}
+
+/// The motor's torque–speed curve (`motor_curve`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MotorCurve {
+    /// T = T_stall (1 − ω/ω0) (default).
+    Linear,
+    /// Piecewise linear in motor speed (`motor_torque_table`).
+    Table,
+}
+
+impl MotorCurve {
+    pub fn name(self) -> &'static str {
+        match self {
+            MotorCurve::Linear => "linear",
+            MotorCurve::Table => "table",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.trim() {
+            "linear" => Some(MotorCurve::Linear),
+            "table" => Some(MotorCurve::Table),
+            _ => None,
+        }
+    }
+}
+
+/// How the motor's torque is commanded (`speed_control`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpeedControl {
+    /// The motor runs on its curve (an induction motor on a fixed
+    /// frequency, a DC motor on a fixed voltage) (default).
+    None,
+    /// A PI speed controller (a servo drive) commands the torque within
+    /// the curve's envelope, with back-calculation anti-windup.
+    Pi,
+}
+
+impl SpeedControl {
+    pub fn name(self) -> &'static str {
+        match self {
+            SpeedControl::None => "none",
+            SpeedControl::Pi => "pi",
+        }
+    }
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.trim() {
+            "none" => Some(SpeedControl::None),
+            "pi" => Some(SpeedControl::Pi),
+            _ => None,
         }
     }
 }

@@ -85,6 +85,26 @@ pub struct Outputs {
     pub ideal_process_force: f64,
 }
 
+/// The rod–pin-bar joint at one instant: where the journal sits in the
+/// bearing and the contact force (model.md, "Clearance joint contact").
+#[derive(Debug, Clone, Copy)]
+pub struct Joint {
+    /// Eccentricity e = P − B (m), penetration δ = |e| − c and its rate.
+    pub ecc: [f64; 2],
+    pub delta: f64,
+    pub delta_dot: f64,
+    /// Normal n = e/|e| and tangent t (n turned +90°).
+    pub n: [f64; 2],
+    pub tt: [f64; 2],
+    /// Normal force (N) and friction on the pin bar along t (N).
+    pub f_n: f64,
+    pub f_t: f64,
+    /// Tangential slip at the contact point (m/s; 0 out of contact).
+    pub v_t: f64,
+    /// The contact force on the rod (normal + friction), N.
+    pub f_rod: [f64; 2],
+}
+
 /// The clearance-joint model with its constants resolved.
 #[derive(Debug, Clone)]
 pub struct ClearanceModel {
@@ -104,9 +124,9 @@ pub struct ClearanceModel {
     pub x4_tdc: f64,
     pub ideal: Kinetostatics,
     /// Rod inertia about the crank pin, I3 + m3 Lc3².
-    j_a: f64,
-    inv_j_a: f64,
-    inv_m4: f64,
+    pub(crate) j_a: f64,
+    pub(crate) inv_j_a: f64,
+    pub(crate) inv_m4: f64,
     pub mode: Mode,
     /// Whether the quadratures (and the ideal mechanism they compare with)
     /// are evaluated. Off during warm-up, where nothing is reported: the
@@ -162,17 +182,24 @@ impl ClearanceModel {
     #[inline]
     pub fn penetration(&self, t: f64, y: &[f64; DIM]) -> (f64, f64) {
         let (s2, c2) = self.theta2(t).sin_cos();
-        let (s3, c3) = y[THETA3].sin_cos();
+        self.penetration_sc(s2, c2, self.omega, [y[THETA3], y[OMEGA3], y[X4], y[V4]])
+    }
+
+    /// [`ClearanceModel::penetration`] for a crank at sin θ2, cos θ2 turning
+    /// at ω2, and the joint's state (θ3, ω3, x4, v4).
+    #[inline(always)]
+    pub fn penetration_sc(&self, s2: f64, c2: f64, omega2: f64, q: [f64; 4]) -> (f64, f64) {
+        let (s3, c3) = q[0].sin_cos();
         let r = self.geom.r;
         let l = self.geom.l;
         let bx = r * c2 + l * c3;
         let by = r * s2 + l * s3;
-        let ex = y[X4] - bx;
+        let ex = q[2] - bx;
         let ey = self.geom.offset - by;
         let e = norm2(ex, ey);
-        let vbx = -r * self.omega * s2 - l * y[OMEGA3] * s3;
-        let vby = r * self.omega * c2 + l * y[OMEGA3] * c3;
-        let dvx = y[V4] - vbx;
+        let vbx = -r * omega2 * s2 - l * q[1] * s3;
+        let vby = r * omega2 * c2 + l * q[1] * c3;
+        let dvx = q[3] - vbx;
         let dvy = -vby;
         let dd = if e > 0.0 {
             (dvx * ex + dvy * ey) / e
@@ -192,12 +219,17 @@ impl ClearanceModel {
     /// Relative speed of journal and bearing centres, |v_P − v_B| (m/s).
     pub fn relative_speed(&self, t: f64, y: &[f64; DIM]) -> f64 {
         let (s2, c2) = self.theta2(t).sin_cos();
-        let (s3, c3) = y[THETA3].sin_cos();
+        self.relative_speed_sc(s2, c2, self.omega, [y[THETA3], y[OMEGA3], y[X4], y[V4]])
+    }
+
+    /// [`ClearanceModel::relative_speed`] as [`ClearanceModel::penetration_sc`].
+    pub fn relative_speed_sc(&self, s2: f64, c2: f64, omega2: f64, q: [f64; 4]) -> f64 {
+        let (s3, c3) = q[0].sin_cos();
         let r = self.geom.r;
         let l = self.geom.l;
-        let vbx = -r * self.omega * s2 - l * y[OMEGA3] * s3;
-        let vby = r * self.omega * c2 + l * y[OMEGA3] * c3;
-        norm2(y[V4] - vbx, vby)
+        let vbx = -r * omega2 * s2 - l * q[1] * s3;
+        let vby = r * omega2 * c2 + l * q[1] * c3;
+        norm2(q[3] - vbx, vby)
     }
 
     /// A first step after a contact onset with approach velocity `approach`:
@@ -218,35 +250,24 @@ impl ClearanceModel {
         self.geom.r * self.omega * self.omega * (1.0 + self.geom.r / self.geom.l) + g[0].hypot(g[1])
     }
 
-    /// The full evaluation in the current mode: derivatives and outputs.
-    #[inline]
-    pub fn evaluate(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
-        self.evaluate_in(self.mode, t, y, dy)
-    }
-
-    /// The full evaluation in a given mode. Inlined into the right-hand side,
-    /// where the outputs it does not need are then never computed.
+    /// The joint for a crank pin at `a` moving at `va`, the rod at
+    /// (sin θ3, cos θ3) turning at ω3 and the pin bar at (x4, v4), in `mode`
+    /// (free flight: no force even past δ = 0).
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
-        let theta2 = self.theta2(t);
-        let (s2, c2) = theta2.sin_cos();
-        let Geometry { r, l, offset } = self.geom;
-        let Inertia {
-            m2,
-            lc2,
-            m3,
-            lc3,
-            m4,
-            g,
-            ..
-        } = self.inertia;
-        let w = self.omega;
-        let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
-        let (s3, c3) = theta3.sin_cos();
-        // Crank pin A and the bearing centre B.
-        let a = [r * c2, r * s2];
-        let va = [-r * w * s2, r * w * c2];
-        let aa = [-r * w * w * c2, -r * w * w * s2];
+    pub fn joint(
+        &self,
+        mode: Mode,
+        a: [f64; 2],
+        va: [f64; 2],
+        s3: f64,
+        c3: f64,
+        omega3: f64,
+        x4: f64,
+        v4: f64,
+    ) -> Joint {
+        let Geometry { l, offset, .. } = self.geom;
+        // The bearing centre B.
         let b = [a[0] + l * c3, a[1] + l * s3];
         let vb = [va[0] - l * omega3 * s3, va[1] + l * omega3 * c3];
         // Eccentricity of the journal P = (x4, offset).
@@ -261,17 +282,70 @@ impl ClearanceModel {
         } else {
             ([1.0, 0.0], norm2(dv[0], dv[1]))
         };
-        let (f_n, f_t) = if mode.in_contact && delta > 0.0 {
+        let (f_n, f_t, v_t) = if mode.in_contact && delta > 0.0 {
             let f_n = self.law.normal_force(delta, delta_dot, mode.approach);
             let tt = [-n[1], n[0]];
             let v_t = dv[0] * tt[0] + dv[1] * tt[1] - omega3 * self.rb;
-            (f_n, coulomb(self.c_f, f_n, v_t, self.v0, self.v1))
+            (f_n, coulomb(self.c_f, f_n, v_t, self.v0, self.v1), v_t)
         } else {
-            (0.0, 0.0)
+            (0.0, 0.0, 0.0)
         };
         let tt = [-n[1], n[0]];
         // Contact force on the rod: normal along +n, friction opposite to the pin bar's.
         let f_rod = [f_n * n[0] - f_t * tt[0], f_n * n[1] - f_t * tt[1]];
+        Joint {
+            ecc,
+            delta,
+            delta_dot,
+            n,
+            tt,
+            f_n,
+            f_t,
+            v_t,
+            f_rod,
+        }
+    }
+
+    /// The full evaluation in the current mode: derivatives and outputs.
+    #[inline]
+    pub fn evaluate(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
+        self.evaluate_in(self.mode, t, y, dy)
+    }
+
+    /// The full evaluation in a given mode. Inlined into the right-hand side,
+    /// where the outputs it does not need are then never computed.
+    #[inline(always)]
+    pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
+        let theta2 = self.theta2(t);
+        let (s2, c2) = theta2.sin_cos();
+        let Geometry { r, l, .. } = self.geom;
+        let Inertia {
+            m2,
+            lc2,
+            m3,
+            lc3,
+            m4,
+            g,
+            ..
+        } = self.inertia;
+        let w = self.omega;
+        let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
+        let (s3, c3) = theta3.sin_cos();
+        // Crank pin A.
+        let a = [r * c2, r * s2];
+        let va = [-r * w * s2, r * w * c2];
+        let aa = [-r * w * w * c2, -r * w * w * s2];
+        let Joint {
+            ecc,
+            delta,
+            delta_dot,
+            n,
+            tt,
+            f_n,
+            f_t,
+            f_rod,
+            ..
+        } = self.joint(mode, a, va, s3, c3, omega3, x4, v4);
         // Rod: moments about A.
         let ba = [l * c3, l * s3];
         let qa = [ba[0] + self.rb * n[0], ba[1] + self.rb * n[1]];
@@ -420,7 +494,7 @@ impl JointModel<DIM> for ClearanceModel {
     fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate_in(mode, t, y, dy);
     }
-    fn crank_speed(&self, _y: &[f64; DIM]) -> Option<f64> {
+    fn stall_margin(&self, _y: &[f64; DIM]) -> Option<f64> {
         None
     }
 }

@@ -51,9 +51,15 @@ pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
     fn outputs_in(&self, mode: Mode, t: f64, y: &[f64; N]) -> Outputs;
     /// The right-hand side in a given contact mode.
     fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; N], dy: &mut [f64; N]);
-    /// The crank's speed ω2 (rad/s) when it is free (a motor drives it):
-    /// the run stops with a stall when it reaches zero. None at constant speed.
-    fn crank_speed(&self, y: &[f64; N]) -> Option<f64>;
+    /// When the crank is free (a motor drives it): its speed ω2 less the
+    /// stall speed (rad/s); the run stops with a stall when this reaches
+    /// zero. None at constant speed.
+    fn stall_margin(&self, y: &[f64; N]) -> Option<f64>;
+    /// Longest step (s): a model whose steps are not limited by contact
+    /// (no joint) keeps them short enough for the peak search.
+    fn max_step(&self) -> f64 {
+        f64::INFINITY
+    }
 
     fn outputs(&self, t: f64, y: &[f64; N]) -> Outputs {
         self.outputs_in(self.mode(), t, y)

@@ -8,13 +8,14 @@
 //! an optional `preset = "paper" | "flores"` as its base.
 
 use super::materials::Material;
+pub use super::motor::MotorParams;
 pub use super::param_table::{PARAM_SPECS, ParamSpec, physical_range, spec, within};
 use super::table::Table;
 pub use crate::fmt::fmt_num;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-pub use super::choices::{ContactModel, Driver, ProcessLaw};
+pub use super::choices::{ContactModel, Driver, MotorCurve, ProcessLaw, SpeedControl};
 pub use super::param_error::ParamError;
 use super::param_value::pairs;
 pub use super::param_value::{ParamValue, parse_value_text};
@@ -66,6 +67,8 @@ pub struct Params {
     /// Gravity vector in the model frame, m/s².
     pub gravity: [f64; 2],
     pub driver: Driver,
+    /// The motor, gear and flywheel (level `motor`).
+    pub motor: MotorParams,
 }
 
 /// Names of the presets.
@@ -107,6 +110,7 @@ impl Params {
             process_law: ProcessLaw::Regularized,
             gravity: [9.81, 0.0],
             driver: Driver::ConstantSpeed,
+            motor: MotorParams::default(),
         }
     }
 
@@ -145,6 +149,7 @@ impl Params {
             process_law: ProcessLaw::Regularized,
             gravity: [0.0, -9.81],
             driver: Driver::ConstantSpeed,
+            motor: MotorParams::default(),
         }
     }
 
@@ -278,10 +283,11 @@ impl Params {
             if !x.is_finite() {
                 return Err(invalid(x.to_string()));
             }
-            // The physical range (a clearance of 0 is the ideal joint).
+            // The physical range (a clearance of 0 is the ideal joint, a
+            // no-load speed of 0 is `auto`).
             if let Some((lo, hi)) = physical_range(key)
                 && !within(x, lo, hi)
-                && !(key == "clearance_mm" && x == 0.0)
+                && !(matches!(key, "clearance_mm" | "motor_no_load_rpm") && x == 0.0)
             {
                 return Err(invalid(fmt_num(x)));
             }
@@ -464,6 +470,41 @@ impl Params {
                     _ => return Err(invalid(show(value))),
                 }
             }
+            "motor_curve" => {
+                self.motor.curve =
+                    MotorCurve::parse(&text()?).ok_or_else(|| invalid(show(value)))?
+            }
+            "speed_control" => {
+                self.motor.control =
+                    SpeedControl::parse(&text()?).ok_or_else(|| invalid(show(value)))?
+            }
+            "motor_stall_torque_nm" => self.motor.stall_torque = num()?,
+            "motor_no_load_rpm" => self.motor.no_load_rpm = num()?,
+            "rotor_inertia_kgm2" => self.motor.rotor_inertia = num()?,
+            "flywheel_inertia_kgm2" => self.motor.flywheel_inertia = num()?,
+            "gear_efficiency" => self.motor.efficiency = num()?,
+            "speed_kp_nms" => self.motor.kp = num()?,
+            "speed_ki_nm" => self.motor.ki = num()?,
+            "motor_torque_table" => {
+                let pts = pairs(value).ok_or_else(|| invalid(show(value)))?;
+                let bad = |i: usize, why: &str| ParamError::Invalid {
+                    key: key.to_string(),
+                    value: format!("{} (point {i}: {why})", show(value)),
+                    allowed: spec.range.to_string(),
+                };
+                for (i, &(w, t)) in pts.iter().enumerate() {
+                    if !(w.is_finite() && (0.0..=1e5).contains(&w)) {
+                        return Err(bad(i, "speed outside 0 … 1e5 rev/min"));
+                    }
+                    if !(t.is_finite() && t.abs() <= 1e5) {
+                        return Err(bad(i, "torque outside −1e5 … 1e5 N·m"));
+                    }
+                    if i > 0 && w <= pts[i - 1].0 {
+                        return Err(bad(i, "speeds must increase strictly"));
+                    }
+                }
+                self.motor.torque_table = Table { points: pts };
+            }
             _ => return Err(ParamError::unknown(key)),
         }
         Ok(())
@@ -507,6 +548,16 @@ impl Params {
             "process_law" => Text(self.process_law.name().into()),
             "gravity_mps2" => Vector(self.gravity.to_vec()),
             "driver" => Text(self.driver.name().into()),
+            "motor_curve" => Text(self.motor.curve.name().into()),
+            "motor_stall_torque_nm" => Number(self.motor.stall_torque),
+            "motor_no_load_rpm" => Number(self.motor.no_load_rpm),
+            "motor_torque_table" => Pairs(self.motor.torque_table.points.clone()),
+            "rotor_inertia_kgm2" => Number(self.motor.rotor_inertia),
+            "flywheel_inertia_kgm2" => Number(self.motor.flywheel_inertia),
+            "gear_efficiency" => Number(self.motor.efficiency),
+            "speed_control" => Text(self.motor.control.name().into()),
+            "speed_kp_nms" => Number(self.motor.kp),
+            "speed_ki_nm" => Number(self.motor.ki),
             _ => return None,
         })
     }
@@ -548,6 +599,20 @@ impl Params {
             return Err(ParamError::Relation {
                 keys: "i3_kgm2, m3_kg, lc3_mm".into(),
                 msg: "the rod's inertia about the crank pin, i3 + m3·lc3², must be positive".into(),
+            });
+        }
+        if self.motor.curve == MotorCurve::Table && self.motor.torque_table.points.len() < 2 {
+            return Err(ParamError::Relation {
+                keys: "motor_curve, motor_torque_table".into(),
+                msg: "motor_curve = \"table\" needs motor_torque_table with at least two points [[rpm, N·m], …]".into(),
+            });
+        }
+        if self.motor.control == SpeedControl::Pi && self.motor.kp <= 0.0 {
+            return Err(ParamError::Relation {
+                keys: "speed_control, speed_kp_nms".into(),
+                msg:
+                    "speed_control = \"pi\" needs speed_kp_nms > 0 (its anti-windup runs at ki/kp)"
+                        .into(),
             });
         }
         if self.v1 <= self.v0 {
@@ -671,6 +736,58 @@ mod tests {
             assert!(msg.contains(key), "{set}: {msg}");
             assert!(msg.contains("allowed"), "{set}: {msg}");
         }
+    }
+
+    /// The motor keys: each bad value names its key and range; the
+    /// relations (a table curve needs a table, PI needs kp > 0) name both
+    /// keys; `auto` is 0; a table round-trips.
+    #[test]
+    fn motor_keys_name_key_and_range() {
+        let cases: &[(&str, &str)] = &[
+            ("gear_efficiency=0", "gear_efficiency"),
+            ("gear_efficiency=1.2", "gear_efficiency"),
+            ("motor_stall_torque_nm=-1", "motor_stall_torque_nm"),
+            ("motor_stall_torque_nm=0", "motor_stall_torque_nm"),
+            ("motor_no_load_rpm=0.5", "motor_no_load_rpm"),
+            ("motor_no_load_rpm=-3", "motor_no_load_rpm"),
+            ("flywheel_inertia_kgm2=1e5", "flywheel_inertia_kgm2"),
+            ("rotor_inertia_kgm2=-1e-6", "rotor_inertia_kgm2"),
+            ("speed_kp_nms=-1", "speed_kp_nms"),
+            ("speed_ki_nm=nan", "speed_ki_nm"),
+            ("motor_curve=cubic", "motor_curve"),
+            ("speed_control=pid", "speed_control"),
+            ("motor_torque_table=[[0,1],[0,2]]", "motor_torque_table"),
+            ("motor_torque_table=[[0,1],[-5,2]]", "motor_torque_table"),
+            ("motor_torque_table=[[0,1e6]]", "motor_torque_table"),
+        ];
+        for (set, key) in cases {
+            let mut p = Params::paper();
+            let msg = p.apply_overrides(&[*set]).unwrap_err().to_string();
+            assert!(msg.contains(key) && msg.contains("allowed"), "{set}: {msg}");
+        }
+        let mut p = Params::paper();
+        let msg = p
+            .apply_overrides(&["motor_curve=table"])
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("motor_torque_table"), "{msg}");
+        let mut p = Params::paper();
+        let msg = p
+            .apply_overrides(&["speed_control=pi", "speed_kp_nms=0"])
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("speed_kp_nms"), "{msg}");
+        let mut p = Params::paper();
+        p.apply_overrides(&[
+            "driver=motor",
+            "motor_no_load_rpm=0",
+            "motor_curve=table",
+            "motor_torque_table=[[0, 2.5], [1000, 1.0], [1500, 0]]",
+            "flywheel_inertia_kgm2=0.01",
+        ])
+        .unwrap();
+        let q = Params::from_toml_str(&p.to_toml()).unwrap();
+        assert_eq!(p, q);
     }
 
     #[test]

@@ -265,9 +265,9 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
         }
     }
 
-    /// The crank stopped on the last step [t0, t1] (ω2 > 0 at t0, ≤ 0 at
-    /// t1): the stop located on the dense output, said as a crank angle
-    /// after top dead centre and a revolution.
+    /// The crank stalled on the last step [t0, t1] (its speed above the
+    /// stall speed at t0, not at t1): the moment located on the dense
+    /// output, said as a crank angle after top dead centre and a revolution.
     fn stall(&mut self, t0: f64, t1: f64, theta_start: f64) -> SimError {
         let mode = self.model.mode();
         self.st.prepare_dense(&InMode {
@@ -276,7 +276,7 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
         });
         let st = &self.st;
         let m = &self.model;
-        let w = |t: f64| m.crank_speed(&st.dense(t)).unwrap_or(0.0);
+        let w = |t: f64| m.stall_margin(&st.dense(t)).unwrap_or(0.0);
         let (w0, w1) = (w(t0), w(t1));
         let (ts, _, _) = if w0 > 0.0 && w1 <= 0.0 {
             bracket_root(w, t0, w0, t1, w1, (t1 - t0) * 1e-9, |_| false)
@@ -293,6 +293,7 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
             revolution: (turned / tau).floor() as u64 + 1,
             motor_torque_nm: o.motor_torque,
             demand_nm: o.m12,
+            fraction_pct: crate::model::motor::STALL_FRACTION * 100.0,
         }
     }
 
@@ -531,7 +532,7 @@ pub(crate) fn run_model<M: JointModel<N>, const N: usize>(
         let stop = if t < t_rep { t_rep } else { t_end };
         let in_contact = r.model.mode().in_contact;
         let h_max = if !r.model.has_joint() {
-            f64::INFINITY
+            r.model.max_step()
         } else if in_contact {
             // Separating: do not reach far past the linearly predicted loss
             // of contact (the force vanishes like δ^1.5 there).
@@ -564,7 +565,7 @@ pub(crate) fn run_model<M: JointModel<N>, const N: usize>(
             free_steps += 1;
         }
         let y1 = *r.st.y();
-        if let Some(w1) = r.model.crank_speed(&y1)
+        if let Some(w1) = r.model.stall_margin(&y1)
             && !(w1 > 0.0)
         {
             return Err(r.stall(t0, t1, theta_start));
@@ -797,6 +798,7 @@ pub(crate) fn run_model<M: JointModel<N>, const N: usize>(
         peak_penetration_um: best[Q_PEN].max(0.0) * 1e6,
         contact_steps,
         free_steps,
+        motor: None,
     };
     Ok(Finished {
         result: SimResult {

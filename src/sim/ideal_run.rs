@@ -134,6 +134,7 @@ pub fn run(p: &Params, opts: &SimOptions) -> SimResult {
         peak_penetration_um: 0.0,
         contact_steps: 0,
         free_steps: 0,
+        motor: None,
     };
     let mut notes = Vec::new();
     if opts.level == super::Level::Ideal {

@@ -13,6 +13,7 @@ pub mod curves;
 pub mod ensemble;
 pub mod fidelity;
 pub mod ideal_run;
+pub mod motor_run;
 pub mod summary;
 pub mod sweep;
 
@@ -279,7 +280,7 @@ pub enum SimError {
     )]
     NonFinite(&'static str),
     #[error(
-        "the motor stalls at {crank_deg:.0}° of crank angle (after top dead centre) in revolution {revolution} (t = {t:.4} s): the motor gives {motor_torque_nm:.3} N·m at standstill where the mechanism demands {demand_nm:.3} N·m at the crank — a stronger motor, a larger flywheel or a higher gear ratio is needed"
+        "the motor stalls at {crank_deg:.0}° of crank angle (after top dead centre) in revolution {revolution} (t = {t:.4} s; the crank's speed fell below {fraction_pct}% of its operating speed): the motor gives {motor_torque_nm:.4} N·m where the mechanism demands {demand_nm:.4} N·m at the crank — a stronger motor, a larger flywheel or a higher gear ratio is needed"
     )]
     Stall {
         t: f64,
@@ -291,6 +292,8 @@ pub enum SimError {
         motor_torque_nm: f64,
         /// Drive torque the mechanism demanded at the crank at the stop, N·m.
         demand_nm: f64,
+        /// The stall speed as a percentage of the operating speed.
+        fraction_pct: f64,
     },
     #[error("cancelled")]
     Cancelled,
@@ -313,20 +316,30 @@ fn simulate_unchecked(
 ) -> Result<SimResult, SimError> {
     p.validate()?;
     opts.validate()?;
-    if p.driver == Driver::Motor || opts.level == Level::Motor {
-        return Err(SimError::Unsupported(
-            "the `motor` level (crank speed ripple from a motor curve and flywheel) is not implemented yet; \
-             use driver = \"constant_speed\" with level kinematic, ideal or clearance"
-                .into(),
-        ));
-    }
     if p.process_law == crate::model::params::ProcessLaw::Stick {
         return Err(SimError::Unsupported(
             "process_law = \"stick\" is not implemented yet; use \"regularized\"".into(),
         ));
     }
-    match opts.level {
-        Level::Kinematic | Level::Ideal => Ok(ideal_run::run(p, opts)),
+    if opts.level == Level::Motor {
+        return motor_run::run(p, opts, progress);
+    }
+    // A motor-driven head below the motor level: constant speed, at the
+    // motor's operating speed.
+    let (q, note) = if p.driver == Driver::Motor {
+        let (q, _) = motor_run::operating_params(p);
+        let note = format!(
+            "driver = motor: at level {} the crank turns at the motor's operating speed, {:.3} rev/min of the motor, constant",
+            opts.level.name(),
+            q.motor_rpm
+        );
+        (q, Some(note))
+    } else {
+        (p.clone(), None)
+    };
+    let p = &q;
+    let mut r = match opts.level {
+        Level::Kinematic | Level::Ideal => ideal_run::run(p, opts),
         Level::Clearance if p.clearance == 0.0 => {
             let mut o = opts.clone();
             o.level = Level::Ideal;
@@ -335,11 +348,13 @@ fn simulate_unchecked(
                 "clearance_mm = 0: the joint is ideal, so the clearance level equals the ideal one"
                     .into(),
             );
-            Ok(r)
+            r
         }
-        Level::Clearance => clearance_run::run(p, opts, progress),
-        Level::Motor => unreachable!("rejected above"),
-    }
+        Level::Clearance => clearance_run::run(p, opts, progress)?,
+        Level::Motor => unreachable!("run above"),
+    };
+    r.notes.extend(note);
+    Ok(r)
 }
 
 /// Wraps a crank angle in radians to [0, 360) degrees.

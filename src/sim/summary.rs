@@ -59,6 +59,9 @@ pub struct Summary {
     /// Free-flight steps whose double crossing of the clearance boundary
     /// was caught by the guard.
     pub double_crossings_caught: u64,
+    /// Level `motor`: speed ripple, motor torque and the energy balance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motor: Option<super::motor_run::MotorSummary>,
 }
 
 impl Summary {
@@ -89,7 +92,7 @@ impl Summary {
 }
 
 /// Quantities whose continuous-time maxima are tracked.
-pub(crate) const NQ: usize = 9;
+pub(crate) const NQ: usize = 12;
 pub(crate) const Q_ACC: usize = 0;
 pub(crate) const Q_FN: usize = 1;
 pub(crate) const Q_M12: usize = 2;
@@ -99,6 +102,11 @@ pub(crate) const Q_SMIN: usize = 5;
 pub(crate) const Q_SMAX: usize = 6;
 pub(crate) const Q_PROC: usize = 7;
 pub(crate) const Q_PEN: usize = 8;
+/// Crank speed's maximum and minimum (−ω2) and the motor torque's peak
+/// (constant or NaN below the motor level: never refined there).
+pub(crate) const Q_W2MAX: usize = 9;
+pub(crate) const Q_W2MIN: usize = 10;
+pub(crate) const Q_TM: usize = 11;
 
 /// The tracked quantities of an output (all maximised; the stroke minimum
 /// as the maximum of −s).
@@ -114,6 +122,9 @@ pub(crate) fn quantities(o: &Outputs) -> [f64; NQ] {
         o.s,
         -o.process_force,
         o.delta,
+        o.omega2,
+        -o.omega2,
+        o.motor_torque.abs(),
     ]
 }
 

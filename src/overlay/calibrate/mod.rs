@@ -52,6 +52,7 @@
 //! as they are.
 
 pub mod coverage;
+pub mod flywheel;
 mod force_fit;
 mod stroke_fit;
 

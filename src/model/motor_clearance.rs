@@ -1,0 +1,290 @@
+//! Level `motor` with a clearance joint (c > 0): the clearance ODE of
+//! model.md with the crank free — θ2 and ω2 join the state, and the crank
+//! pin's acceleration carries α2: a_A = −r ω2² (cos θ2, sin θ2) + r α2
+//! (−sin θ2, cos θ2).
+//!
+//! α2 couples the crank and the rod through the pin A. The contact force
+//! depends on positions and velocities only, so with α2 unknown the rod's
+//! equation gives α3 = α3⁰ + k3 α2 and the drive torque M12 = M12⁰ + S α2
+//! (S: the crank's I_O plus the rod's reaction to the crank pin's
+//! tangential acceleration), and the crank's balance J_d α2 = M_drive − M12
+//! gives α2 = (M_drive − M12⁰) / (J_d + S). The pin bar's equation does not
+//! see α2 (it feels the rod only through the contact).
+//!
+//! The summary's deviations compare with the ideal mechanism at the same
+//! crank angle, speed and acceleration: what the clearance adds, the ripple
+//! being reported on its own.
+//!
+//! State: (θ3, ω3, x4, v4, Q_s, Q_M) as the clearance level, then the
+//! drive's part (model/motor.rs).
+
+use super::clearance::{ClearanceModel, Joint, Mode, OMEGA3, Outputs, Q_DM2, Q_S, THETA3, V4, X4};
+use super::contact::coulomb;
+use super::joint_model::JointModel;
+use super::kinematics::Geometry;
+use super::kinetostatics::{Inertia, cross};
+use super::motor::*;
+use super::params::Params;
+use crate::solver::{Scale, System, Tolerance};
+
+/// Base index of the drive's part.
+pub const BASE: usize = 6;
+/// Dimension of the state.
+pub const DIM: usize = BASE + D_LEN;
+pub const THETA2: usize = BASE + D_THETA2;
+pub const OMEGA2: usize = BASE + D_OMEGA2;
+
+/// The motor-driven clearance mechanism.
+#[derive(Debug, Clone)]
+pub struct MotorClearanceModel {
+    /// The constant-speed model: geometry, contact law, loads (its own
+    /// ω and θ0 are not used).
+    pub inner: ClearanceModel,
+    pub drive: MotorDrive,
+}
+
+impl MotorClearanceModel {
+    pub fn new(p: &Params) -> Self {
+        Self {
+            inner: ClearanceModel::new(p),
+            drive: MotorDrive::of(p),
+        }
+    }
+
+    #[inline(always)]
+    fn joint_state(y: &[f64; DIM]) -> [f64; 4] {
+        [y[THETA3], y[OMEGA3], y[X4], y[V4]]
+    }
+
+    /// Derivatives and outputs in a contact mode.
+    #[inline(always)]
+    pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
+        let m = &self.inner;
+        let theta2 = y[THETA2];
+        let w = y[OMEGA2];
+        let (s2, c2) = theta2.sin_cos();
+        let Geometry { r, l, .. } = m.geom;
+        let Inertia {
+            m2,
+            lc2,
+            m3,
+            lc3,
+            m4,
+            g,
+            ..
+        } = m.inertia;
+        let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
+        let (s3, c3) = theta3.sin_cos();
+        // Crank pin A; its acceleration without α2, and per unit α2.
+        let a = [r * c2, r * s2];
+        let va = [-r * w * s2, r * w * c2];
+        let aa0 = [-r * w * w * c2, -r * w * w * s2];
+        let e2 = [-r * s2, r * c2];
+        let Joint {
+            ecc,
+            delta,
+            delta_dot,
+            n,
+            tt,
+            f_n,
+            f_t,
+            v_t,
+            f_rod,
+        } = m.joint(mode, a, va, s3, c3, omega3, x4, v4);
+        // Rod: moments about A; α3 = α3⁰ + k3 α2.
+        let ba = [l * c3, l * s3];
+        let qa = [ba[0] + m.rb * n[0], ba[1] + m.rb * n[1]];
+        let u3 = [c3, s3];
+        let moment0 = cross(ba, [f_n * n[0], f_n * n[1]])
+            + cross(qa, [-f_t * tt[0], -f_t * tt[1]])
+            + lc3 * m3 * cross(u3, g)
+            - m3 * lc3 * cross(u3, aa0);
+        let alpha3_0 = moment0 * m.inv_j_a;
+        let k3 = -m3 * lc3 * cross(u3, e2) * m.inv_j_a;
+        // Pin bar.
+        let s = x4 - m.x4_tdc;
+        let f_pin_y = -f_rod[1];
+        let n_g = (f_pin_y + m4 * g[1]).abs();
+        let f_guide = coulomb(m.mu_g, n_g, v4, m.v0, m.v1);
+        let f_proc = m.process.force(s, v4);
+        let a4 = (-f_rod[0] + f_guide + f_proc) * m.inv_m4 + g[0];
+        // Drive torque M12 = M12⁰ + S α2 (F_A = m3 a_G3 − F_rod − m3 g).
+        let a_g3 = m
+            .inertia
+            .rod_centroid_accel_sc(aa0, s3, c3, omega3, alpha3_0);
+        let f_a = [
+            m3 * a_g3[0] - f_rod[0] - m3 * g[0],
+            m3 * a_g3[1] - f_rod[1] - m3 * g[1],
+        ];
+        let g2 = [lc2 * c2, lc2 * s2];
+        let m12_0 = cross(a, f_a) - cross(g2, [m2 * g[0], m2 * g[1]]);
+        let da_g3 = [e2[0] - lc3 * k3 * s3, e2[1] + lc3 * k3 * c3];
+        let s_inertia = m.inertia.i_o() + m3 * cross(a, da_g3);
+        // The crank's balance.
+        let (t_motor, di) = self.drive.torque(w, y[BASE + D_PI]);
+        let m_drive = self.drive.at_crank(t_motor);
+        let alpha2 = (m_drive - m12_0) / (self.drive.inertia + s_inertia);
+        let alpha3 = alpha3_0 + k3 * alpha2;
+        let m12 = m12_0 + s_inertia * alpha2;
+        dy[THETA3] = omega3;
+        dy[OMEGA3] = alpha3;
+        dy[X4] = v4;
+        dy[V4] = a4;
+        drive_derivatives(
+            dy,
+            BASE,
+            &self.drive,
+            w,
+            alpha2,
+            s2,
+            c2,
+            t_motor,
+            m_drive,
+            di,
+            (-f_guide * v4, -f_proc * v4, f_n * delta_dot - f_t * v_t),
+        );
+        // The ideal mechanism at the same angle, speed and acceleration.
+        let (ideal_s, ideal_v, ideal_a, ideal_m12, ideal_pf) = if m.quadratures {
+            let id = m.ideal.at_sc(theta2, s2, c2, w, alpha2);
+            let ideal_s = id.pose.x4 - m.x4_tdc;
+            dy[Q_S] = s - ideal_s;
+            let dm = m12 - id.m12;
+            dy[Q_DM2] = dm * dm;
+            (ideal_s, id.pose.v4, id.pose.a4, id.m12, id.process_force)
+        } else {
+            dy[Q_S] = 0.0;
+            dy[Q_DM2] = 0.0;
+            (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
+        };
+        Outputs {
+            t,
+            theta2,
+            omega2: w,
+            alpha2,
+            motor_torque: t_motor,
+            s,
+            v4,
+            a4,
+            alpha3,
+            f_n,
+            f_t,
+            m12,
+            delta,
+            delta_dot,
+            ecc,
+            process_force: f_proc,
+            ideal_s,
+            ideal_v,
+            ideal_a,
+            ideal_m12,
+            ideal_process_force: ideal_pf,
+        }
+    }
+}
+
+impl System<DIM> for MotorClearanceModel {
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        self.evaluate_in(self.inner.mode, t, y, dy);
+    }
+}
+
+impl JointModel<DIM> for MotorClearanceModel {
+    const Q_S: usize = Q_S;
+    const Q_DM2: usize = Q_DM2;
+    fn has_joint(&self) -> bool {
+        true
+    }
+    fn mode(&self) -> Mode {
+        self.inner.mode
+    }
+    fn set_mode(&mut self, mode: Mode) {
+        self.inner.mode = mode;
+    }
+    fn set_quadratures(&mut self, on: bool) {
+        self.inner.quadratures = on;
+    }
+    fn clearance(&self) -> f64 {
+        self.inner.clearance
+    }
+    fn rb(&self) -> f64 {
+        self.inner.rb
+    }
+    fn x4_tdc(&self) -> f64 {
+        self.inner.x4_tdc
+    }
+    fn tolerance(&self, rtol: f64, atol: f64) -> Tolerance<DIM> {
+        let inner = self.inner.tolerance(rtol, atol);
+        let r = self.inner.geom.r;
+        let mut scale = [Scale::Ignore; DIM];
+        let mut at = [0.0; DIM];
+        scale[..6].copy_from_slice(&inner.scale);
+        at[..6].copy_from_slice(&inner.atol);
+        // θ2 at the clearance's scale through the crank length.
+        let [a, b, c] = self
+            .drive
+            .scales(Scale::Fixed(self.inner.clearance.max(1e-9) / r));
+        scale[THETA2] = a;
+        scale[OMEGA2] = b;
+        scale[BASE + D_PI] = c;
+        at[THETA2] = atol / r;
+        at[OMEGA2] = atol / r;
+        Tolerance {
+            rtol,
+            atol: at,
+            scale,
+        }
+    }
+    fn initial_state(&self, dx4: f64) -> [f64; DIM] {
+        let w = self.drive.operating.omega;
+        let th = self.inner.theta0;
+        let pose = self.inner.geom.pose(th, w, 0.0);
+        let mut y = [0.0; DIM];
+        y[THETA3] = pose.theta3();
+        y[OMEGA3] = pose.omega3;
+        y[X4] = pose.x4 + dx4;
+        y[V4] = pose.v4;
+        y[THETA2] = th;
+        y[OMEGA2] = w;
+        y[BASE + D_PI] = self.drive.integrator_start();
+        y
+    }
+    #[inline]
+    fn theta2(&self, _t: f64, y: &[f64; DIM]) -> f64 {
+        y[THETA2]
+    }
+    #[inline]
+    fn penetration(&self, _t: f64, y: &[f64; DIM]) -> (f64, f64) {
+        let (s2, c2) = y[THETA2].sin_cos();
+        self.inner
+            .penetration_sc(s2, c2, y[OMEGA2], Self::joint_state(y))
+    }
+    fn relative_speed(&self, _t: f64, y: &[f64; DIM]) -> f64 {
+        let (s2, c2) = y[THETA2].sin_cos();
+        self.inner
+            .relative_speed_sc(s2, c2, y[OMEGA2], Self::joint_state(y))
+    }
+    #[inline]
+    fn deviation(&self, _t: f64, y: &[f64; DIM]) -> (f64, f64) {
+        let p = self.inner.geom.pose(y[THETA2], y[OMEGA2], 0.0);
+        (y[X4] - p.x4, y[V4] - p.v4)
+    }
+    fn onset_step(&self, approach: f64, tol_pos: f64) -> f64 {
+        self.inner.onset_step(approach, tol_pos)
+    }
+    fn accel_scale(&self) -> f64 {
+        self.inner.accel_scale()
+    }
+    #[inline]
+    fn outputs_in(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Outputs {
+        let mut dy = [0.0; DIM];
+        self.evaluate_in(mode, t, y, &mut dy)
+    }
+    #[inline]
+    fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        self.evaluate_in(mode, t, y, dy);
+    }
+    fn stall_margin(&self, y: &[f64; DIM]) -> Option<f64> {
+        Some(y[OMEGA2] - self.drive.stall_speed())
+    }
+}
