@@ -17,11 +17,12 @@
 //! even if a step overshoots δ = 0 (the event is then located and the step
 //! cut back), in contact the force is max(0, …) of the penetration.
 
-use super::contact::{ContactLaw, ProcessLoad, coulomb};
-use super::joint_model::JointModel;
+use super::contact::{ContactLaw, ProcessLoad, ProcessMode, coulomb};
+use super::joint_model::{EndCache, JointModel};
 use super::kinematics::Geometry;
 use super::kinetostatics::{Inertia, Kinetostatics, cross};
 use super::params::Params;
+use super::sincos::SinCos;
 use crate::solver::{Scale, System, Tolerance};
 use serde::Serialize;
 
@@ -42,12 +43,15 @@ pub const V4: usize = 3;
 pub const Q_S: usize = 4;
 pub const Q_DM2: usize = 5;
 
-/// Free flight or contact, as set by the event logic.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// Free flight or contact, and what the part does to the pin bar (stick
+/// law), as set by the event logic.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
 pub struct Mode {
     pub in_contact: bool,
     /// δ̇ at the onset of the current contact (m/s).
     pub approach: f64,
+    /// Stick law: resisting down or up, or holding (regularized: unused).
+    pub process: ProcessMode,
 }
 
 /// Everything the model knows at one instant (for outputs and figures).
@@ -133,6 +137,11 @@ pub struct ClearanceModel {
     /// ideal kinetostatics is a sixth of a right-hand side's cost. When it
     /// is off, the `ideal_*` outputs are NaN.
     pub quadratures: bool,
+    /// sin/cos of θ2 and θ3, advanced by rotation from the last call.
+    pub(crate) sc2: SinCos,
+    pub(crate) sc3: SinCos,
+    /// The outputs of the last end-of-step evaluation.
+    pub(crate) end: EndCache<DIM>,
 }
 
 impl ClearanceModel {
@@ -157,11 +166,11 @@ impl ClearanceModel {
             j_a: p.i3 + p.m3 * p.lc3 * p.lc3,
             inv_j_a: 1.0 / (p.i3 + p.m3 * p.lc3 * p.lc3),
             inv_m4: 1.0 / p.m4,
-            mode: Mode {
-                in_contact: false,
-                approach: 0.0,
-            },
+            mode: Mode::default(),
             quadratures: true,
+            sc2: SinCos::new(),
+            sc3: SinCos::new(),
+            end: EndCache::default(),
         }
     }
 
@@ -181,7 +190,7 @@ impl ClearanceModel {
     /// Penetration δ and its rate from the state (cheap: no forces).
     #[inline]
     pub fn penetration(&self, t: f64, y: &[f64; DIM]) -> (f64, f64) {
-        let (s2, c2) = self.theta2(t).sin_cos();
+        let (s2, c2) = self.sc2.get(self.theta2(t));
         self.penetration_sc(s2, c2, self.omega, [y[THETA3], y[OMEGA3], y[X4], y[V4]])
     }
 
@@ -189,7 +198,7 @@ impl ClearanceModel {
     /// at ω2, and the joint's state (θ3, ω3, x4, v4).
     #[inline(always)]
     pub fn penetration_sc(&self, s2: f64, c2: f64, omega2: f64, q: [f64; 4]) -> (f64, f64) {
-        let (s3, c3) = q[0].sin_cos();
+        let (s3, c3) = self.sc3.get(q[0]);
         let r = self.geom.r;
         let l = self.geom.l;
         let bx = r * c2 + l * c3;
@@ -212,19 +221,21 @@ impl ClearanceModel {
     /// The ideal mechanism's x4 and v4 at time t.
     #[inline]
     pub fn ideal_x4_v4(&self, t: f64) -> (f64, f64) {
-        let p = self.geom.pose(self.theta2(t), self.omega, 0.0);
+        let th = self.theta2(t);
+        let (s2, c2) = self.sc2.get(th);
+        let p = self.geom.pose_sc(th, s2, c2, self.omega, 0.0);
         (p.x4, p.v4)
     }
 
     /// Relative speed of journal and bearing centres, |v_P − v_B| (m/s).
     pub fn relative_speed(&self, t: f64, y: &[f64; DIM]) -> f64 {
-        let (s2, c2) = self.theta2(t).sin_cos();
+        let (s2, c2) = self.sc2.get(self.theta2(t));
         self.relative_speed_sc(s2, c2, self.omega, [y[THETA3], y[OMEGA3], y[X4], y[V4]])
     }
 
     /// [`ClearanceModel::relative_speed`] as [`ClearanceModel::penetration_sc`].
     pub fn relative_speed_sc(&self, s2: f64, c2: f64, omega2: f64, q: [f64; 4]) -> f64 {
-        let (s3, c3) = q[0].sin_cos();
+        let (s3, c3) = self.sc3.get(q[0]);
         let r = self.geom.r;
         let l = self.geom.l;
         let vbx = -r * omega2 * s2 - l * q[1] * s3;
@@ -317,7 +328,7 @@ impl ClearanceModel {
     #[inline(always)]
     pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
         let theta2 = self.theta2(t);
-        let (s2, c2) = theta2.sin_cos();
+        let (s2, c2) = self.sc2.get(theta2);
         let Geometry { r, l, .. } = self.geom;
         let Inertia {
             m2,
@@ -330,7 +341,7 @@ impl ClearanceModel {
         } = self.inertia;
         let w = self.omega;
         let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
-        let (s3, c3) = theta3.sin_cos();
+        let (s3, c3) = self.sc3.get(theta3);
         // Crank pin A.
         let a = [r * c2, r * s2];
         let va = [-r * w * s2, r * w * c2];
@@ -360,8 +371,13 @@ impl ClearanceModel {
         let f_pin_y = -f_rod[1];
         let n_g = (f_pin_y + m4 * g[1]).abs();
         let f_guide = coulomb(self.mu_g, n_g, v4, self.v0, self.v1);
-        let f_proc = self.process.force(s, v4);
-        let a4 = (-f_rod[0] + f_guide + f_proc) * self.inv_m4 + g[0];
+        let (f_proc, a4) = if mode.process == ProcessMode::Held {
+            // Held by the part: the part balances every other force.
+            (-(-f_rod[0] + f_guide + m4 * g[0]), 0.0)
+        } else {
+            let f_proc = self.process.force_in(mode.process, s, v4);
+            (f_proc, (-f_rod[0] + f_guide + f_proc) * self.inv_m4 + g[0])
+        };
         // Drive torque from the crank's balance: F_A = m3 a_G3 − F_rod − m3 g.
         let a_g3 = self
             .inertia
@@ -432,6 +448,10 @@ impl System<DIM> for ClearanceModel {
     fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate(t, y, dy);
     }
+    fn rhs_step_end(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        let o = self.evaluate(t, y, dy);
+        self.end.store(t, y, self.mode, o);
+    }
 }
 
 impl JointModel<DIM> for ClearanceModel {
@@ -494,8 +514,84 @@ impl JointModel<DIM> for ClearanceModel {
     fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate_in(mode, t, y, dy);
     }
+    fn cached_end(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Option<Outputs> {
+        self.end.get(t, y, mode)
+    }
+    fn process_event(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Option<f64> {
+        stick_event(&self.process, mode, y[V4], || {
+            ClearanceModel::outputs_in(self, mode, t, y)
+        })
+    }
+    fn process_switch(&self, mode: Mode, t: f64, y: &mut [f64; DIM]) -> ProcessMode {
+        stick_switch(&self.process, y, V4, |y| {
+            ClearanceModel::outputs_in(
+                self,
+                Mode {
+                    process: ProcessMode::Held,
+                    ..mode
+                },
+                t,
+                y,
+            )
+        })
+    }
     fn stall_margin(&self, _y: &[f64; DIM]) -> Option<f64> {
         None
+    }
+}
+
+/// The stick law's event function in `mode` (None under the regularized
+/// law): resisting down it is v4 (the pin bar stops when it reaches 0),
+/// resisting up −v4, holding the distance of the other forces F_o from the
+/// ends of −F_wd … F_ins (`held` gives the outputs in the held mode, whose
+/// process force is −F_o).
+#[inline]
+pub fn stick_event(
+    process: &ProcessLoad,
+    mode: Mode,
+    v4: f64,
+    held: impl FnOnce() -> Outputs,
+) -> Option<f64> {
+    if process.law != super::params::ProcessLaw::Stick {
+        return None;
+    }
+    Some(match mode.process {
+        ProcessMode::Down => v4,
+        ProcessMode::Up => -v4,
+        ProcessMode::Held => {
+            let o = held();
+            let f_o = -o.process_force;
+            let (lo, hi) = process.hold_range(o.s);
+            (-lo - f_o).min(f_o + hi)
+        }
+    })
+}
+
+/// What the part does after a stick-law event at state `y` (v4 ≈ 0): it
+/// holds the pin bar when the other forces F_o lie inside −F_wd … F_ins
+/// (strictly: on an end the pin moves on), else the pin moves the way F_o
+/// pushes it. The pin bar's speed is set to exactly 0 (the event's point).
+pub fn stick_switch<const N: usize>(
+    process: &ProcessLoad,
+    y: &mut [f64; N],
+    v4: usize,
+    held: impl Fn(&[f64; N]) -> Outputs,
+) -> ProcessMode {
+    y[v4] = 0.0;
+    let o = held(y);
+    let f_o = -o.process_force;
+    let (lo, hi) = process.hold_range(o.s);
+    let margin = 1e-12 * (1.0 + lo.abs() + hi.abs());
+    if f_o >= -lo - margin && f_o > 0.0 {
+        ProcessMode::Down
+    } else if f_o <= -hi + margin && f_o < 0.0 {
+        ProcessMode::Up
+    } else if lo < 0.0 || hi > 0.0 {
+        ProcessMode::Held
+    } else if f_o >= 0.0 {
+        ProcessMode::Down
+    } else {
+        ProcessMode::Up
     }
 }
 
@@ -573,6 +669,7 @@ mod tests {
         m.mode = Mode {
             in_contact: true,
             approach: 1.0,
+            ..Mode::default()
         };
         let mut y = m.initial_state(0.0);
         // Push the journal 1 µm into the wall along +x.

@@ -1,7 +1,7 @@
 //! Contact-impact law of the clearance joint, friction smoothing and the
 //! process load (model.md, "Clearance joint contact" and "Loads").
 
-use super::params::{ContactModel, Params};
+use super::params::{ContactModel, Params, ProcessLaw};
 use super::table::Table;
 use serde::Serialize;
 
@@ -78,7 +78,7 @@ pub fn coulomb(coef: f64, normal: f64, v: f64, v0: f64, v1: f64) -> f64 {
     -coef * smoothing(v.abs(), v0, v1) * normal * v.signum()
 }
 
-/// The process load on the pin bar from the part (regularized law).
+/// The process load on the pin bar from the part.
 #[derive(Debug, Clone, Serialize)]
 pub struct ProcessLoad {
     pub standoff: f64,
@@ -86,6 +86,22 @@ pub struct ProcessLoad {
     pub f_wd: Table,
     pub v0: f64,
     pub v1: f64,
+    /// `regularized` (the c_d ramp) or `stick` (set-valued: see
+    /// [`ProcessMode`]; the ideal mechanism takes the plain sign law, its
+    /// pin bar stops only at the dead centres' instants).
+    pub law: ProcessLaw,
+}
+
+/// Under the stick law, what the part does to the pin bar: resists it
+/// moving down (−F_ins) or up (+F_wd), or holds it at rest with whatever
+/// force within −F_ins … +F_wd balances the others. Switched at located
+/// events (model.md, "Loads"); the regularized law ignores it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+pub enum ProcessMode {
+    #[default]
+    Down,
+    Up,
+    Held,
 }
 
 impl ProcessLoad {
@@ -96,17 +112,58 @@ impl ProcessLoad {
             f_wd: p.f_wd.clone(),
             v0: p.v0,
             v1: p.v1,
+            law: p.process_law,
+        }
+    }
+
+    /// The force in a mode of the stick law (Down, Up; Held is decided by
+    /// the balance, not here), or the regularized law's.
+    #[inline(always)]
+    pub fn force_in(&self, pm: ProcessMode, s: f64, v4: f64) -> f64 {
+        if self.law == ProcessLaw::Regularized {
+            return self.force(s, v4);
+        }
+        let d = s - self.standoff;
+        if d <= 0.0 {
+            return 0.0;
+        }
+        match pm {
+            ProcessMode::Down => -self.f_ins.eval(d),
+            ProcessMode::Up => self.f_wd.eval(d),
+            ProcessMode::Held => 0.0,
+        }
+    }
+
+    /// The interval the part's force may take while it holds the pin bar
+    /// at stroke `s`: (−F_ins(d), F_wd(d)); (0, 0) out of the part.
+    #[inline]
+    pub fn hold_range(&self, s: f64) -> (f64, f64) {
+        let d = s - self.standoff;
+        if d <= 0.0 {
+            (0.0, 0.0)
+        } else {
+            (-self.f_ins.eval(d), self.f_wd.eval(d))
         }
     }
 
     /// Force along x on the pin bar at stroke `s` and velocity `v4`:
     /// −F_ins(d)·c_d(v4) moving down, +F_wd(d)·c_d(|v4|) moving up, zero
     /// before the pin meets the part (d = s − standoff ≤ 0).
+    /// Under the stick law this is the plain sign law (the ideal mechanism's).
     #[inline(always)]
     pub fn force(&self, s: f64, v4: f64) -> f64 {
         let d = s - self.standoff;
         if d <= 0.0 {
             return 0.0;
+        }
+        if self.law == ProcessLaw::Stick {
+            return if v4 > 0.0 {
+                -self.f_ins.eval(d)
+            } else if v4 < 0.0 {
+                self.f_wd.eval(d)
+            } else {
+                0.0
+            };
         }
         if v4 > 0.0 {
             -self.f_ins.eval(d) * smoothing(v4, self.v0, self.v1)
@@ -178,5 +235,26 @@ mod tests {
         assert_eq!(pl.force(15e-3, -1.0), 0.0);
         // At rest the regularized law gives no force.
         assert_eq!(pl.force(15e-3, 0.0), 0.0);
+    }
+
+    /// The stick law: full force while sliding (no ramp), the hold range
+    /// −F_ins … F_wd in the part, nothing outside it.
+    #[test]
+    fn stick_law_forces_and_hold_range() {
+        let mut p = Params::paper();
+        p.process_law = ProcessLaw::Stick;
+        p.f_wd = Table::from_mm(&[(0.0, 1.0), (2.0, 3.0)]).unwrap();
+        let pl = ProcessLoad::of(&p);
+        // Sliding slowly down: the whole F_ins, not a ramp of it.
+        assert_eq!(pl.force_in(ProcessMode::Down, 16e-3, 1e-9), -23.0);
+        assert!((pl.force_in(ProcessMode::Up, 15e-3, -1e-9) - 2.0).abs() < 1e-12);
+        assert_eq!(pl.force_in(ProcessMode::Down, 13e-3, 1.0), 0.0);
+        let (lo, hi) = pl.hold_range(15e-3);
+        // d = 1 mm: F_ins = 21 + 2 · 0.5 / 1.5 N, F_wd = 1 + 2 · 1 / 2 N.
+        assert!((lo + 21.0 + 2.0 / 3.0).abs() < 1e-12 && (hi - 2.0).abs() < 1e-12);
+        assert_eq!(pl.hold_range(13e-3), (0.0, 0.0));
+        // The ideal mechanism's sign law.
+        assert_eq!(pl.force(16e-3, 1e-9), -23.0);
+        assert_eq!(pl.force(16e-3, 0.0), 0.0);
     }
 }

@@ -8,7 +8,9 @@
 //! through these methods and the two quadrature indices.
 
 use super::clearance::{Mode, Outputs};
+use super::contact::ProcessMode;
 use crate::solver::Tolerance;
+use std::cell::Cell;
 
 /// A mechanism model integrated by the event loop.
 pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
@@ -63,6 +65,47 @@ pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
 
     fn outputs(&self, t: f64, y: &[f64; N]) -> Outputs {
         self.outputs_in(self.mode(), t, y)
+    }
+
+    /// The stick law's event function in `mode` at (t, y): the run switches
+    /// the process mode where it goes from positive to ≤ 0 (None: the
+    /// regularized law, no such events).
+    fn process_event(&self, _mode: Mode, _t: f64, _y: &[f64; N]) -> Option<f64> {
+        None
+    }
+    /// The process mode after such an event at (t, y); may set the pin
+    /// bar's speed to exactly 0 in `y`.
+    fn process_switch(&self, mode: Mode, _t: f64, _y: &mut [f64; N]) -> ProcessMode {
+        mode.process
+    }
+    /// The outputs at (t, y) in `mode` if the stepper's last end-of-step
+    /// evaluation computed them (see [`EndCache`]).
+    fn cached_end(&self, _mode: Mode, _t: f64, _y: &[f64; N]) -> Option<Outputs> {
+        None
+    }
+}
+
+/// The outputs a model computed in its last end-of-step evaluation
+/// (`System::rhs_step_end`), kept for the step's figures: one evaluation
+/// per step less.
+#[derive(Debug, Clone, Default)]
+pub struct EndCache<const N: usize> {
+    last: Cell<Option<(f64, [f64; N], Mode, Outputs)>>,
+}
+
+impl<const N: usize> EndCache<N> {
+    #[inline]
+    pub fn store(&self, t: f64, y: &[f64; N], mode: Mode, o: Outputs) {
+        self.last.set(Some((t, *y, mode, o)));
+    }
+
+    /// The kept outputs if they are those of (t, y) in `mode`.
+    #[inline]
+    pub fn get(&self, t: f64, y: &[f64; N], mode: Mode) -> Option<Outputs> {
+        match self.last.get() {
+            Some((tc, yc, mc, o)) if tc == t && yc == *y && mc == mode => Some(o),
+            _ => None,
+        }
     }
 }
 

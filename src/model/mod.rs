@@ -15,6 +15,7 @@ pub mod param_error;
 pub mod param_table;
 pub mod param_value;
 pub mod params;
+pub mod sincos;
 pub mod table;
 
 pub use params::{ContactModel, ParamError, Params};

@@ -18,9 +18,12 @@
 //! State: (θ3, ω3, x4, v4, Q_s, Q_M) as the clearance level, then the
 //! drive's part (model/motor.rs).
 
-use super::clearance::{ClearanceModel, Joint, Mode, OMEGA3, Outputs, Q_DM2, Q_S, THETA3, V4, X4};
-use super::contact::coulomb;
-use super::joint_model::JointModel;
+use super::clearance::{
+    ClearanceModel, Joint, Mode, OMEGA3, Outputs, Q_DM2, Q_S, THETA3, V4, X4, stick_event,
+    stick_switch,
+};
+use super::contact::{ProcessMode, coulomb};
+use super::joint_model::{EndCache, JointModel};
 use super::kinematics::Geometry;
 use super::kinetostatics::{Inertia, cross};
 use super::motor::*;
@@ -41,6 +44,7 @@ pub struct MotorClearanceModel {
     /// ω and θ0 are not used).
     pub inner: ClearanceModel,
     pub drive: MotorDrive,
+    end: EndCache<DIM>,
 }
 
 impl MotorClearanceModel {
@@ -48,6 +52,7 @@ impl MotorClearanceModel {
         Self {
             inner: ClearanceModel::new(p),
             drive: MotorDrive::of(p),
+            end: EndCache::default(),
         }
     }
 
@@ -62,7 +67,7 @@ impl MotorClearanceModel {
         let m = &self.inner;
         let theta2 = y[THETA2];
         let w = y[OMEGA2];
-        let (s2, c2) = theta2.sin_cos();
+        let (s2, c2) = m.sc2.get(theta2);
         let Geometry { r, l, .. } = m.geom;
         let Inertia {
             m2,
@@ -74,7 +79,7 @@ impl MotorClearanceModel {
             ..
         } = m.inertia;
         let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
-        let (s3, c3) = theta3.sin_cos();
+        let (s3, c3) = m.sc3.get(theta3);
         // Crank pin A; its acceleration without α2, and per unit α2.
         let a = [r * c2, r * s2];
         let va = [-r * w * s2, r * w * c2];
@@ -106,8 +111,12 @@ impl MotorClearanceModel {
         let f_pin_y = -f_rod[1];
         let n_g = (f_pin_y + m4 * g[1]).abs();
         let f_guide = coulomb(m.mu_g, n_g, v4, m.v0, m.v1);
-        let f_proc = m.process.force(s, v4);
-        let a4 = (-f_rod[0] + f_guide + f_proc) * m.inv_m4 + g[0];
+        let (f_proc, a4) = if mode.process == ProcessMode::Held {
+            (-(-f_rod[0] + f_guide + m4 * g[0]), 0.0)
+        } else {
+            let f_proc = m.process.force_in(mode.process, s, v4);
+            (f_proc, (-f_rod[0] + f_guide + f_proc) * m.inv_m4 + g[0])
+        };
         // Drive torque M12 = M12⁰ + S α2 (F_A = m3 a_G3 − F_rod − m3 g).
         let a_g3 = m
             .inertia
@@ -187,6 +196,10 @@ impl System<DIM> for MotorClearanceModel {
     fn rhs(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate_in(self.inner.mode, t, y, dy);
     }
+    fn rhs_step_end(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
+        let o = self.evaluate_in(self.inner.mode, t, y, dy);
+        self.end.store(t, y, self.inner.mode, o);
+    }
 }
 
 impl JointModel<DIM> for MotorClearanceModel {
@@ -255,12 +268,12 @@ impl JointModel<DIM> for MotorClearanceModel {
     }
     #[inline]
     fn penetration(&self, _t: f64, y: &[f64; DIM]) -> (f64, f64) {
-        let (s2, c2) = y[THETA2].sin_cos();
+        let (s2, c2) = self.inner.sc2.get(y[THETA2]);
         self.inner
             .penetration_sc(s2, c2, y[OMEGA2], Self::joint_state(y))
     }
     fn relative_speed(&self, _t: f64, y: &[f64; DIM]) -> f64 {
-        let (s2, c2) = y[THETA2].sin_cos();
+        let (s2, c2) = self.inner.sc2.get(y[THETA2]);
         self.inner
             .relative_speed_sc(s2, c2, y[OMEGA2], Self::joint_state(y))
     }
@@ -283,6 +296,26 @@ impl JointModel<DIM> for MotorClearanceModel {
     #[inline]
     fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate_in(mode, t, y, dy);
+    }
+    fn cached_end(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Option<Outputs> {
+        self.end.get(t, y, mode)
+    }
+    fn process_event(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Option<f64> {
+        stick_event(&self.inner.process, mode, y[V4], || {
+            self.outputs_in(mode, t, y)
+        })
+    }
+    fn process_switch(&self, mode: Mode, t: f64, y: &mut [f64; DIM]) -> ProcessMode {
+        stick_switch(&self.inner.process, y, V4, |y| {
+            self.outputs_in(
+                Mode {
+                    process: ProcessMode::Held,
+                    ..mode
+                },
+                t,
+                y,
+            )
+        })
     }
     fn stall_margin(&self, y: &[f64; DIM]) -> Option<f64> {
         Some(y[OMEGA2] - self.drive.stall_speed())

@@ -30,6 +30,7 @@ pub struct RigidMotorModel {
     pub geom: Geometry,
     pub theta0: f64,
     pub x4_tdc: f64,
+    sc2: super::sincos::SinCos,
 }
 
 impl RigidMotorModel {
@@ -41,6 +42,7 @@ impl RigidMotorModel {
             geom,
             theta0: geom.tdc_angle(),
             x4_tdc: geom.x4_tdc(),
+            sc2: super::sincos::SinCos::new(),
         }
     }
 
@@ -49,7 +51,7 @@ impl RigidMotorModel {
     pub fn evaluate(&self, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
         let theta2 = y[THETA2];
         let w = y[OMEGA2];
-        let (s2, c2) = theta2.sin_cos();
+        let (s2, c2) = self.sc2.get(theta2);
         let (t_motor, di) = self.drive.torque(w, y[BASE + D_PI]);
         let m_drive = self.drive.at_crank(t_motor);
         let (alpha2, f) = solve_alpha2(&self.ks, theta2, s2, c2, w, self.drive.inertia, m_drive);
@@ -110,10 +112,7 @@ impl JointModel<DIM> for RigidMotorModel {
         false
     }
     fn mode(&self) -> Mode {
-        Mode {
-            in_contact: false,
-            approach: 0.0,
-        }
+        Mode::default()
     }
     fn set_mode(&mut self, _mode: Mode) {}
     fn set_quadratures(&mut self, _on: bool) {}

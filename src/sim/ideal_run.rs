@@ -135,6 +135,7 @@ pub fn run(p: &Params, opts: &SimOptions) -> SimResult {
         contact_steps: 0,
         free_steps: 0,
         motor: None,
+        stick: None,
     };
     let mut notes = Vec::new();
     if opts.level == super::Level::Ideal {

@@ -316,11 +316,6 @@ fn simulate_unchecked(
 ) -> Result<SimResult, SimError> {
     p.validate()?;
     opts.validate()?;
-    if p.process_law == crate::model::params::ProcessLaw::Stick {
-        return Err(SimError::Unsupported(
-            "process_law = \"stick\" is not implemented yet; use \"regularized\"".into(),
-        ));
-    }
     if opts.level == Level::Motor {
         return motor_run::run(p, opts, progress);
     }

@@ -62,6 +62,20 @@ pub struct Summary {
     /// Level `motor`: speed ripple, motor torque and the energy balance.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motor: Option<super::motor_run::MotorSummary>,
+    /// Stick law: how often the part held the pin bar, and the steps it took.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stick: Option<StickSummary>,
+}
+
+/// The stick law's events over the whole run (warm-up included): the
+/// switches between resisting down, up and holding; the holding phases and
+/// the integration steps spent in them (bounded: no chattering).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct StickSummary {
+    pub events: u64,
+    pub held_phases: u64,
+    pub held_steps: u64,
+    pub max_steps_per_phase: u64,
 }
 
 impl Summary {

@@ -130,7 +130,7 @@ pub(crate) fn derivative_at_end<const N: usize, S: System<N>>(
     stats: &mut Stats,
 ) -> Result<[f64; N], StepError> {
     let mut f = [0.0; N];
-    sys.rhs(t, y, &mut f);
+    sys.rhs_step_end(t, y, &mut f);
     stats.rhs_evals += 1;
     if !super::all_finite(&f) {
         return Err(StepError::NonFinite { t });

@@ -34,8 +34,13 @@ pub struct Dop853<const N: usize> {
     pub stats: Stats,
 }
 
-#[inline]
-fn comb<const N: usize>(y: &[f64; N], h: f64, a: &[f64], k: &[[f64; N]; 16]) -> [f64; N] {
+#[inline(always)]
+fn comb<const N: usize, const M: usize>(
+    y: &[f64; N],
+    h: f64,
+    a: &[f64; M],
+    k: &[[f64; N]; 16],
+) -> [f64; N] {
     let mut out = *y;
     for (j, &aj) in a.iter().enumerate() {
         if aj != 0.0 {
@@ -88,23 +93,36 @@ impl<const N: usize> Dop853<N> {
         }
         let ncon = self.cfg.tol.n_controlled() as f64;
         let (t, y) = (self.pos.t, self.pos.y);
-        let mut k = [[0.0; N]; 16];
+        // The stages are computed in place: a rejected try overwrites
+        // them, the accepted one stays for the dense output.
+        let k = &mut self.k;
         k[0] = self.pos.f;
         let mut h = self.h.min(h_max);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
             h = h_try;
-            let rows: [&[f64]; 11] = [&A2, &A3, &A4, &A5, &A6, &A7, &A8, &A9, &A10, &A11, &A12];
             let tph = if last { t_end } else { t + h };
-            let mut y12 = y;
-            for (s, row) in rows.iter().enumerate() {
-                let yt = comb(&y, h, row, &k);
-                let ts = if s == 10 { tph } else { t + C[s + 1] * h };
-                sys.rhs(ts, &yt, &mut k[s + 1]);
-                if s == 10 {
-                    y12 = yt;
-                }
+            // The stages written out, so that each row's constant
+            // coefficients (zeros dropped) compile to straight-line code;
+            // the same sums in the same order as a loop over the rows.
+            macro_rules! stage {
+                ($s:expr, $row:expr) => {{
+                    let yt = comb(&y, h, &$row, k);
+                    sys.rhs(t + C[$s] * h, &yt, &mut k[$s]);
+                }};
             }
+            stage!(1, A2);
+            stage!(2, A3);
+            stage!(3, A4);
+            stage!(4, A5);
+            stage!(5, A6);
+            stage!(6, A7);
+            stage!(7, A8);
+            stage!(8, A9);
+            stage!(9, A10);
+            stage!(10, A11);
+            let y12 = comb(&y, h, &A12, k);
+            sys.rhs(tph, &y12, &mut k[11]);
             self.stats.rhs_evals += 11;
             // 8th-order solution.
             let mut ynew = y;
@@ -173,7 +191,6 @@ impl<const N: usize> Dop853<N> {
                     hnew = hnew.min(h);
                 }
                 self.rejected_last = false;
-                self.k = k;
                 self.pos.advance((t, y), tph, ynew, fnew);
                 self.h_used = h;
                 self.h = hnew.min(self.cfg.h_max);
@@ -196,12 +213,16 @@ impl<const N: usize> Dop853<N> {
         let h = self.h_used;
         let (t, y) = (self.pos.t_prev, self.pos.y_prev);
         let k = &mut self.k;
-        for (s, row) in [(13usize, &A14[..]), (14, &A15[..]), (15, &A16[..])] {
-            let yt = comb(&y, h, row, k);
-            let mut out = [0.0; N];
-            sys.rhs(t + C[s] * h, &yt, &mut out);
-            k[s] = out;
-        }
+        let yt = comb(&y, h, &A14, k);
+        let mut out = [0.0; N];
+        sys.rhs(t + C[13] * h, &yt, &mut out);
+        k[13] = out;
+        let yt = comb(&y, h, &A15, k);
+        sys.rhs(t + C[14] * h, &yt, &mut out);
+        k[14] = out;
+        let yt = comb(&y, h, &A16, k);
+        sys.rhs(t + C[15] * h, &yt, &mut out);
+        k[15] = out;
         self.stats.rhs_evals += 3;
         let mut r = [[0.0; N]; 8];
         for i in 0..N {

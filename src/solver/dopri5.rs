@@ -133,7 +133,7 @@ impl<const N: usize> Dopri5<N> {
                 y1[i] = y[i]
                     + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
             }
-            sys.rhs(tph, &y1, &mut k7);
+            sys.rhs_step_end(tph, &y1, &mut k7);
             self.stats.rhs_evals += 6;
             let mut e = [0.0; N];
             for i in 0..N {

@@ -45,6 +45,14 @@ pub mod roots;
 /// A first-order ODE system y' = f(t, y) with N components.
 pub trait System<const N: usize> {
     fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]);
+
+    /// The evaluation at the end of a step (the derivative the next step
+    /// starts from): a model may keep what it computed there, so that the
+    /// step's outputs need no second evaluation.
+    #[inline]
+    fn rhs_step_end(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        self.rhs(t, y, dy)
+    }
 }
 
 /// How a component enters the error norm.

@@ -75,7 +75,7 @@ impl<const N: usize> Rk4<N> {
         }
         let tnew = if last { t_end } else { t + h };
         let mut fnew = [0.0; N];
-        sys.rhs(tnew, &ynew, &mut fnew);
+        sys.rhs_step_end(tnew, &ynew, &mut fnew);
         self.stats.rhs_evals += 4;
         if !all_finite(&ynew) || !all_finite(&fnew) {
             return Err(StepError::NonFinite { t: self.pos.t });

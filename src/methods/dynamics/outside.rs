@@ -55,6 +55,7 @@ impl ode_solvers::System<f64, OsState> for OdeSolversRhs {
         let mode = Mode {
             in_contact: d > 0.0,
             approach: 1.0,
+            ..Mode::default()
         };
         let mut out = [0.0; DIM];
         self.model.evaluate_in(mode, tt, &ya, &mut out);
