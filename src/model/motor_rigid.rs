@@ -179,9 +179,10 @@ impl JointModel<DIM> for RigidMotorModel {
     fn stall_margin(&self, y: &[f64; DIM]) -> Option<f64> {
         Some(y[OMEGA2] - self.drive.stall_speed())
     }
-    /// Half a degree of crank at the operating speed: the step ends are
-    /// where the peak search starts (the ideal level scans at 0.5°).
+    /// A degree of crank at the operating speed: the step ends are where
+    /// the peak search starts (Brent within two steps must see one peak;
+    /// the ideal level scans at 0.5°).
     fn max_step(&self) -> f64 {
-        0.5f64.to_radians() / self.drive.operating.omega
+        1f64.to_radians() / self.drive.operating.omega
     }
 }

@@ -344,7 +344,9 @@ pub fn predict(
     let mut p = p.clone();
     p.motor_rpm = motor_rpm;
     let n = opts.points_per_rev.max(8);
-    let deterministic = opts.level != Level::Clearance || p.clearance == 0.0;
+    // (A motor-driven run needs its warm-up even with the ideal joint.)
+    let deterministic = matches!(opts.level, Level::Kinematic | Level::Ideal)
+        || (opts.level == Level::Clearance && p.clearance == 0.0);
     // Whole revolutions from TDC: the grid then starts at TDC (θ0 = TDC).
     let warmup = if deterministic {
         0.0

@@ -224,7 +224,9 @@ fn finish<M: MotorModel<N>, const N: usize>(
     let mean_w = turned / dt;
     // First harmonic over crank angle, the mean's leakage over a window
     // that is not a whole number of turns removed.
-    let (h1, phase) = if turned >= TAU * (1.0 - 1e-9) {
+    // (A window of one period at the operating speed turns a hair less or
+    // more than a revolution: the leakage correction covers it.)
+    let (h1, phase) = if turned >= 0.95 * TAU {
         let w_bar = d(D_Q_W2) / turned;
         let c = d(D_Q_WC) - w_bar * (thb.sin() - tha.sin());
         let s = d(D_Q_WS) - w_bar * (tha.cos() - thb.cos());
