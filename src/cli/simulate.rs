@@ -50,6 +50,10 @@ pub struct Args {
     /// Force resolution of the scene for `--level auto`, N.
     #[arg(long, default_value_t = 0.05, value_parser = super::common::bounds::resolution)]
     pub force_resolution_n: f64,
+    /// Crank-speed resolution of the scene for `--level auto`: the smallest
+    /// first harmonic of the speed per cycle the spindle channel resolves, %.
+    #[arg(long, default_value_t = 0.05, value_parser = super::common::bounds::resolution)]
+    pub speed_resolution_pct: f64,
     /// Print one JSON object instead of the text summary.
     #[arg(long)]
     pub json: bool,
@@ -74,6 +78,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 stroke_mm: args.resolution_mm,
                 force_n: args.force_resolution_n,
                 needs_forces: true,
+                speed_pct: args.speed_resolution_pct,
             },
             method,
         )?),

@@ -89,6 +89,7 @@ pub fn auto_level(
             stroke_mm: 0.002,
             force_n: 0.05,
             needs_forces: true,
+            ..Default::default()
         },
         crate::solver::Method::Dop853,
     )

@@ -197,7 +197,10 @@ pub fn view(s: &Session, ui: &PaneState) -> MethodsView {
                 (
                     f.clearance_mm,
                     f.motor_rpm,
-                    f.chosen.name().to_string(),
+                    match f.flywheel_kgm2 {
+                        Some(j) => format!("{} (motor-driven, flywheel {j} kg m²)", f.chosen.name()),
+                        None => f.chosen.name().to_string(),
+                    },
                     f.reason.clone(),
                 )
             })

@@ -93,7 +93,7 @@ pub fn apply_edit(params: &Params, key: &str, text: &str) -> Result<Edit, String
             .map_err(|e| e.to_string()),
         "level" => LevelChoice::parse(text).map(Edit::Level).ok_or_else(|| {
             format!(
-                "invalid value for `level`: {text} (allowed: auto, kinematic, ideal, clearance)"
+                "invalid value for `level`: {text} (allowed: auto, kinematic, ideal, clearance, motor)"
             )
         }),
         _ => {
@@ -163,7 +163,33 @@ pub struct FidelityStep {
     pub step: String,
     pub stroke_diff_mm: Option<f64>,
     pub force_diff_n: Option<f64>,
+    /// Step to `motor`: the crank speed's first harmonic, %.
+    pub speed_ripple_pct: Option<f64>,
     pub invisible: bool,
+    /// The upper rung's cost per revolution, ms.
+    pub cost_ms_per_rev: Option<f64>,
+}
+
+impl FidelityStep {
+    /// One line of the ladder: the step, what it changes, whether the
+    /// sensors see it, its cost.
+    pub fn line(&self) -> String {
+        let mut parts = vec![self.step.clone()];
+        if let Some(r) = self.speed_ripple_pct {
+            parts.push(format!("ripple {r:.3} %"));
+        }
+        if let Some(s) = self.stroke_diff_mm {
+            parts.push(format!("Δs {s:.4} mm"));
+        }
+        if let Some(f) = self.force_diff_n {
+            parts.push(format!("ΔF {f:.3} N"));
+        }
+        parts.push(if self.invisible { "unseen" } else { "seen" }.into());
+        if let Some(c) = self.cost_ms_per_rev {
+            parts.push(format!("{c:.2} ms/rev"));
+        }
+        parts.join("  ")
+    }
 }
 
 /// The Model pane's view.
@@ -268,6 +294,35 @@ fn figures(s: &Summary) -> Vec<FigureRow> {
         f("steps", s.steps.to_string(), "–".into()),
         f("rhs evaluations", s.rhs_evals.to_string(), "–".into()),
     ]
+    .into_iter()
+    .chain(s.motor.iter().flat_map(|m| {
+        [
+            f(
+                "crank rpm mean",
+                format!("{:.2}", m.mean_crank_rpm),
+                format!("{:.2}", m.operating_crank_rpm),
+            ),
+            f(
+                "ripple p-p %",
+                format!("{:.3}", m.ripple_p2p_pct),
+                "0".into(),
+            ),
+            f("ripple 1st harm. %", fmt_opt(m.ripple_h1_pct, 3), "0".into()),
+            f(
+                "motor torque pk/RMS",
+                format!("{:.3}/{:.3}", m.peak_motor_torque_nm, m.rms_motor_torque_nm),
+                "–".into(),
+            ),
+        ]
+    }))
+    .chain(s.stick.iter().map(|st| {
+        f(
+            "held by the part",
+            format!("{}× ≤ {} steps", st.held_phases, st.max_steps_per_phase),
+            "–".into(),
+        )
+    }))
+    .collect()
 }
 
 pub fn view(s: &Session, ui: &PaneState) -> ModelView {
@@ -285,7 +340,7 @@ pub fn view(s: &Session, ui: &PaneState) -> ModelView {
         ParamRow {
             key: "level".into(),
             value: level_name(s.level),
-            range: "auto, kinematic, ideal, clearance".into(),
+            range: "auto, kinematic, ideal, clearance, motor".into(),
             group: "set".into(),
             help: "fidelity level (auto: the cheapest the sensors cannot tell from the next)"
                 .into(),
@@ -325,7 +380,13 @@ pub fn view(s: &Session, ui: &PaneState) -> ModelView {
                 step: format!("{} → {}", st.from.name(), st.to.name()),
                 stroke_diff_mm: st.stroke_diff_mm,
                 force_diff_n: st.force_diff_n,
+                speed_ripple_pct: st.speed_ripple_pct,
                 invisible: st.invisible,
+                cost_ms_per_rev: f
+                    .costs
+                    .iter()
+                    .find(|c| c.level == st.to)
+                    .map(|c| c.wall_ms_per_rev),
             })
             .collect(),
     });

@@ -1,7 +1,8 @@
-//! Fidelity chosen across the study grid (`sim::fidelity`).
+//! Fidelity chosen across the study grid (`sim::fidelity`), and for
+//! motor-driven heads with and without a flywheel (the fourth rung).
 
 use crate::methods::Effort;
-use crate::model::params::Params;
+use crate::model::params::{Driver, Params};
 use crate::sim::Level;
 use crate::sim::fidelity::{SceneResolution, assess};
 use crate::solver::Method;
@@ -16,6 +17,12 @@ pub struct FidelityCell {
     pub stroke_diff_mm: Option<f64>,
     pub force_diff_n: Option<f64>,
     pub reason: String,
+    /// A motor-driven head (driver = motor): its flywheel, kg m², and the
+    /// crank speed's first harmonic the ladder weighed, %.
+    #[serde(default)]
+    pub flywheel_kgm2: Option<f64>,
+    #[serde(default)]
+    pub speed_ripple_pct: Option<f64>,
 }
 
 pub fn fidelity_map(effort: Effort) -> Vec<FidelityCell> {
@@ -26,22 +33,42 @@ pub fn fidelity_map(effort: Effort) -> Vec<FidelityCell> {
             vec![1000.0, 1500.0, 2000.0],
         ),
     };
+    // Motor-driven heads: the default motor without a flywheel, and with
+    // one that holds the speed below what the spindle resolves.
+    let motors: Vec<(f64, f64, f64)> = match effort {
+        Effort::Quick => vec![(0.1, 1200.0, 0.0), (0.1, 1200.0, 0.05)],
+        Effort::Full => vec![
+            (0.0, 1200.0, 0.0),
+            (0.1, 1200.0, 0.0),
+            (0.1, 1200.0, 1e-3),
+            (0.1, 1200.0, 0.05),
+            (0.1, 2000.0, 0.0),
+        ],
+    };
+    let cases = cs
+        .iter()
+        .flat_map(|&c| speeds.iter().map(move |&rpm| (c, rpm, None)))
+        .chain(motors.into_iter().map(|(c, rpm, j)| (c, rpm, Some(j))));
     let mut out = Vec::new();
-    for &c in &cs {
-        for &rpm in &speeds {
-            let mut p = Params::paper();
-            p.clearance = c * 1e-3;
-            p.motor_rpm = rpm;
-            if let Ok(r) = assess(&p, SceneResolution::default(), Method::Dop853) {
-                out.push(FidelityCell {
-                    clearance_mm: c,
-                    motor_rpm: rpm,
-                    chosen: r.chosen,
-                    stroke_diff_mm: r.steps.get(1).and_then(|s| s.stroke_diff_mm),
-                    force_diff_n: r.steps.get(1).and_then(|s| s.force_diff_n),
-                    reason: r.reason,
-                });
-            }
+    for (c, rpm, fly) in cases {
+        let mut p = Params::paper();
+        p.clearance = c * 1e-3;
+        p.motor_rpm = rpm;
+        if let Some(j) = fly {
+            p.driver = Driver::Motor;
+            p.motor.flywheel_inertia = j;
+        }
+        if let Ok(r) = assess(&p, SceneResolution::default(), Method::Dop853) {
+            out.push(FidelityCell {
+                clearance_mm: c,
+                motor_rpm: rpm,
+                chosen: r.chosen,
+                stroke_diff_mm: r.steps.get(1).and_then(|s| s.stroke_diff_mm),
+                force_diff_n: r.steps.get(1).and_then(|s| s.force_diff_n),
+                reason: r.reason,
+                flywheel_kgm2: fly,
+                speed_ripple_pct: r.steps.get(2).and_then(|s| s.speed_ripple_pct),
+            });
         }
     }
     out

@@ -106,6 +106,15 @@ pub(super) fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
             format!("{} — {}", fv.recommended, fv.reason),
             theme,
         ));
+        lines.push(Line::styled("ladder:", theme.muted()));
+        for st in &fv.steps {
+            let style = if st.invisible {
+                theme.muted()
+            } else {
+                theme.base()
+            };
+            lines.push(Line::styled(format!("  {}", st.line()), style));
+        }
     }
     for n in &v.notes {
         lines.push(Line::styled(format!("note: {n}"), theme.muted()));
