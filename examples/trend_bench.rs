@@ -37,7 +37,10 @@ fn main() {
         ..WearSeries::default()
     };
     let logs = series.write(&dir).expect("the series");
-    eprintln!("{n} logs of {cycles} cycles written in {:.1} s", t.elapsed().as_secs_f64());
+    eprintln!(
+        "{n} logs of {cycles} cycles written in {:.1} s",
+        t.elapsed().as_secs_f64()
+    );
     let opts = TrendOptions {
         limit_mm: Some(0.8),
         ..TrendOptions::default()

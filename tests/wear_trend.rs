@@ -239,3 +239,70 @@ fn a_known_archard_law_is_recovered() {
     );
     assert!(fc.at_lo < fc.at && fc.at_hi.is_some_and(|hi| hi > fc.at));
 }
+
+/// Bad input never reaches the fit silently: a valid MCAP of another kind
+/// (one JSON channel that is no rig signal), a text file named `.mcap` and
+/// an empty file are each listed with an error naming the file; no head is
+/// made of them.
+#[test]
+fn foreign_and_broken_logs_are_listed_with_their_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let foreign = dir.path().join("weather.mcap");
+    {
+        let file = std::io::BufWriter::new(std::fs::File::create(&foreign).unwrap());
+        let mut w = mcap::WriteOptions::new().create(file).unwrap();
+        let ch = w
+            .add_channel(
+                0,
+                "/weather/temperature",
+                "json",
+                &std::collections::BTreeMap::new(),
+            )
+            .unwrap();
+        for i in 0..10u32 {
+            let t = 1_790_000_000_000_000_000 + u64::from(i) * 1_000_000;
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: ch,
+                    sequence: i,
+                    log_time: t,
+                    publish_time: t,
+                },
+                format!("{{\"celsius\": {}}}", 20 + i).as_bytes(),
+            )
+            .unwrap();
+        }
+        w.finish().unwrap();
+    }
+    let text = dir.path().join("notes.mcap");
+    std::fs::write(&text, "minutes of the shift meeting").unwrap();
+    let empty = dir.path().join("empty.mcap");
+    std::fs::write(&empty, b"").unwrap();
+    let opts = TrendOptions {
+        limit_mm: Some(0.8),
+        ..TrendOptions::default()
+    };
+    let r = run_trend(
+        &[foreign, text, empty],
+        &opts,
+        &mut TrendCache::default(),
+        &Progress::hidden(),
+    );
+    for e in &r.errors {
+        eprintln!("{}: {}", e.file, e.error);
+    }
+    assert_eq!(r.logs, 3);
+    assert_eq!(r.calibrated, 0);
+    assert!(r.heads.is_empty(), "{:?}", r.heads.len());
+    assert_eq!(r.errors.len(), 3, "{:?}", r.errors);
+    for name in ["weather.mcap", "notes.mcap", "empty.mcap"] {
+        let e = r.errors.iter().find(|e| e.file.ends_with(name)).unwrap();
+        assert!(!e.error.trim().is_empty(), "{name}: empty error");
+    }
+    // The report's Markdown lists them under "Left out".
+    let md = r.to_markdown();
+    assert!(
+        md.contains("## Left out") && md.contains("weather.mcap"),
+        "{md}"
+    );
+}

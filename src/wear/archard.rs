@@ -304,13 +304,13 @@ impl ArchardFit {
         let c_now = work.g_inv(fit.at(x_last));
         let w_now = work.work_at(c_now);
         let mut notes = work.notes.clone();
-        if let (Some(f), Some(l)) = (work.ladder.first(), work.ladder.last()) {
-            if c_min < f.clearance_mm || c_max > l.clearance_mm {
-                notes.push(format!(
-                    "the history's clearances ({c_min:.3}–{c_max:.3} mm) reach outside the simulated ladder ({:.3}–{:.3} mm): W held at the end value there",
-                    f.clearance_mm, l.clearance_mm
-                ));
-            }
+        if let (Some(f), Some(l)) = (work.ladder.first(), work.ladder.last())
+            && (c_min < f.clearance_mm || c_max > l.clearance_mm)
+        {
+            notes.push(format!(
+                "the history's clearances ({c_min:.3}–{c_max:.3} mm) reach outside the simulated ladder ({:.3}–{:.3} mm): W held at the end value there",
+                f.clearance_mm, l.clearance_mm
+            ));
         }
         ArchardFit {
             k_mm_per_j: fit.slope,

@@ -176,7 +176,7 @@ pub fn t_cdf(t: f64, nu: f64) -> f64 {
 /// 3z)/(96ν²) above (Abramowitz & Stegun 26.7.5), the normal quantile z for
 /// ν = ∞. NaN for p outside (0, 1) or ν ≤ 0.
 pub fn t_quantile(p: f64, nu: f64) -> f64 {
-    if !(p > 0.0 && p < 1.0) || !(nu > 0.0) {
+    if !(p > 0.0 && p < 1.0 && nu > 0.0) {
         return f64::NAN;
     }
     if p == 0.5 {
