@@ -243,6 +243,89 @@ fn kind_of(v: &Value) -> &'static str {
     }
 }
 
+/// A batch `run overlay` step: every log of the session compared with the
+/// model; the detail line per log (cycles, stroke RMS residual, time), an
+/// error when a log could not be compared.
+pub fn run_overlay_step(session: &mut Session) -> Result<String, String> {
+    if session.logs.is_empty() {
+        return Err("no rig log loaded".into());
+    }
+    let mut msgs = Vec::new();
+    let mut failed = false;
+    for i in 0..session.logs.len() {
+        session.run_overlay_now(i);
+        if let Some(r) = session.overlay_of(i) {
+            match &r.report {
+                Ok(rep) => msgs.push(format!(
+                    "{}: {} cycles, stroke RMS {:.4} mm, {:.0} ms",
+                    session.logs[i].path, rep.run.cycles, rep.run.stroke_rms_err_mm, r.wall_ms
+                )),
+                Err(e) => {
+                    failed = true;
+                    msgs.push(e.clone());
+                }
+            }
+        }
+    }
+    if failed {
+        Err(msgs.join("; "))
+    } else {
+        Ok(msgs.join("; "))
+    }
+}
+
+/// A batch `run calibrate` step: every log of the session calibrated
+/// against the model (as `pinsight calibrate LOG` with no options; the
+/// Overlay pane shows the result); the detail line per log (clearance ±
+/// U95, standoff, residual of the mean stroke before → after, time), an
+/// error when a log could not be calibrated.
+pub fn run_calibrate_step(
+    session: &mut Session,
+    progress: &crate::progress::Progress,
+) -> Result<String, String> {
+    if session.logs.is_empty() {
+        return Err("no rig log loaded".into());
+    }
+    let mut msgs = Vec::new();
+    let mut failed = false;
+    for i in 0..session.logs.len() {
+        session.run_calibration_with(i, progress);
+        let Some(r) = session.calibration_of(i) else {
+            continue;
+        };
+        match &r.report {
+            Ok(rep) => {
+                let est = |name: &str| {
+                    rep.estimates
+                        .iter()
+                        .find(|e| e.name == name)
+                        .map_or("–".to_string(), |e| {
+                            format!("{:.4} ± {:.4}", e.value, e.u95)
+                        })
+                };
+                msgs.push(format!(
+                    "{}: clearance {} mm, standoff {} mm, stroke mean RMS {:.4} → {:.4} mm, {:.0} ms",
+                    session.logs[i].path,
+                    est("clearance"),
+                    est("standoff"),
+                    rep.before.stroke_mean_rms_mm,
+                    rep.after.stroke_mean_rms_mm,
+                    r.wall_ms
+                ))
+            }
+            Err(e) => {
+                failed = true;
+                msgs.push(e.clone());
+            }
+        }
+    }
+    if failed {
+        Err(msgs.join("; "))
+    } else {
+        Ok(msgs.join("; "))
+    }
+}
+
 /// A batch `run trend` step: the wear trend over the session's logs; the
 /// detail line (logs, calibrations, each head's verdict), an error when a
 /// log was left out or the trend could not run.

@@ -194,6 +194,7 @@ pub const UI_OPTIONS: &[&str] = &[
     "signals.channel",
     "overlay.cycle",
     "overlay.log",
+    "overlay.calibrate",
     "model.selected",
     "study.factor",
     "study.quantity",
@@ -212,6 +213,14 @@ pub(crate) fn parse_f64(v: &str) -> Result<f64, String> {
         .ok()
         .filter(|x| x.is_finite())
         .ok_or_else(|| format!("`{v}` is not a number"))
+}
+
+pub(crate) fn parse_bool(v: &str) -> Result<bool, String> {
+    match v.trim().to_ascii_lowercase().as_str() {
+        "yes" | "true" | "on" | "1" => Ok(true),
+        "no" | "false" | "off" | "0" => Ok(false),
+        _ => Err(format!("`{v}` is not yes or no")),
+    }
 }
 
 pub(crate) fn parse_usize(v: &str) -> Result<usize, String> {
