@@ -19,7 +19,7 @@
 
 use super::chart::{ChartView, SeriesKind, SeriesView, decimate_points};
 use super::session::Session;
-use super::{PaneState, csv_table, parse_bool, parse_usize};
+use super::{PaneState, csv_num, csv_table, parse_bool, parse_usize};
 use crate::overlay::calibrate::{CalibrationReport, Residuals};
 use serde::Serialize;
 use std::sync::Arc;
@@ -130,21 +130,17 @@ impl OverlayView {
     }
 
     pub fn to_csv(&self) -> String {
-        let f = |x: Option<f64>| x.map(|v| format!("{v:.6}")).unwrap_or_default();
-        let rows: Vec<Vec<String>> = self
-            .cycles
-            .iter()
-            .map(|c| {
-                vec![
-                    c.index.to_string(),
-                    f(c.stroke_rms_mm),
-                    f(c.force_rms_n),
-                    f(c.stroke_max_mm),
-                    f(c.force_max_n),
-                    c.note.clone(),
-                ]
-            })
-            .collect();
+        let f = |x: Option<f64>| csv_num(x, 6);
+        let row = |c: &CycleRow| {
+            vec![
+                c.index.to_string(),
+                f(c.stroke_rms_mm),
+                f(c.force_rms_n),
+                f(c.stroke_max_mm),
+                f(c.force_max_n),
+                c.note.clone(),
+            ]
+        };
         csv_table(
             &[
                 "cycle",
@@ -154,7 +150,7 @@ impl OverlayView {
                 "force_max_abs_n",
                 "note",
             ],
-            &rows,
+            self.cycles.iter().map(row),
         )
     }
 }

@@ -380,14 +380,11 @@ impl Session {
     /// Calibrates log `i` now against the model, reporting to (and stopped
     /// by) `progress`.
     pub fn run_calibration_with(&mut self, i: usize, progress: &Progress) {
-        let r = match self.logs.get(i) {
-            Some(LogEntry {
-                rig: Some((log, cycles)),
-                ..
-            }) => run_calibration(i, log, cycles, progress),
-            Some(l) => CalibrationRun {
+        let r = match self.rig_of(i) {
+            Some(Ok((log, cycles))) => run_calibration(i, log, cycles, progress),
+            Some(Err(e)) => CalibrationRun {
                 log: i,
-                report: Err(not_a_rig_log(&l.path)),
+                report: Err(e),
                 wall_ms: 0.0,
             },
             None => return,
@@ -395,27 +392,31 @@ impl Session {
         self.set_calibration(r);
     }
 
+    /// Log `i`'s rig data and cycles, or why it has none (None: no log `i`).
+    fn rig_of(
+        &self,
+        i: usize,
+    ) -> Option<Result<(&crate::rig::RigLog, &crate::rig::cycles::CycleSet), String>> {
+        let l = self.logs.get(i)?;
+        Some(match &l.rig {
+            Some((log, cycles)) => Ok((log, cycles)),
+            None => Err(format!("{}: not a rig log (no cycles to compare)", l.path)),
+        })
+    }
+
     /// Runs the overlay of log `i` now.
     pub fn run_overlay_now(&mut self, i: usize) {
-        let r = match self.logs.get(i) {
-            Some(LogEntry {
-                rig: Some((log, cycles)),
-                ..
-            }) => run_overlay(i, log, cycles, &Progress::hidden()),
-            Some(l) => OverlayRun {
+        let r = match self.rig_of(i) {
+            Some(Ok((log, cycles))) => run_overlay(i, log, cycles, &Progress::hidden()),
+            Some(Err(e)) => OverlayRun {
                 log: i,
-                report: Err(not_a_rig_log(&l.path)),
+                report: Err(e),
                 wall_ms: 0.0,
             },
             None => return,
         };
         self.set_overlay(r);
     }
-}
-
-/// Why a log entry without cycles cannot be compared or calibrated.
-fn not_a_rig_log(path: &str) -> String {
-    format!("{path}: not a rig log (no cycles to compare)")
 }
 
 #[cfg(test)]
