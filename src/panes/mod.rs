@@ -194,6 +194,7 @@ pub const UI_OPTIONS: &[&str] = &[
     "signals.channel",
     "overlay.cycle",
     "overlay.log",
+    "overlay.calibrate",
     "model.selected",
     "study.factor",
     "study.quantity",
@@ -212,6 +213,14 @@ pub(crate) fn parse_f64(v: &str) -> Result<f64, String> {
         .ok()
         .filter(|x| x.is_finite())
         .ok_or_else(|| format!("`{v}` is not a number"))
+}
+
+pub(crate) fn parse_bool(v: &str) -> Result<bool, String> {
+    match v.trim().to_ascii_lowercase().as_str() {
+        "yes" | "true" | "on" | "1" => Ok(true),
+        "no" | "false" | "off" | "0" => Ok(false),
+        _ => Err(format!("`{v}` is not yes or no")),
+    }
 }
 
 pub(crate) fn parse_usize(v: &str) -> Result<usize, String> {
@@ -318,15 +327,23 @@ pub(crate) fn csv_field(s: &str) -> String {
 }
 
 /// A CSV document from a header and rows.
-pub(crate) fn csv_table(header: &[&str], rows: &[Vec<String>]) -> String {
+pub(crate) fn csv_table<R: AsRef<[String]>>(
+    header: &[&str],
+    rows: impl IntoIterator<Item = R>,
+) -> String {
     let mut out = header.join(",");
     out.push('\n');
     for r in rows {
-        let line: Vec<String> = r.iter().map(|f| csv_field(f)).collect();
+        let line: Vec<String> = r.as_ref().iter().map(|f| csv_field(f)).collect();
         out.push_str(&line.join(","));
         out.push('\n');
     }
     out
+}
+
+/// A number for CSV cells: empty for None, else `{:.prec$}`.
+pub(crate) fn csv_num(x: Option<f64>, prec: usize) -> String {
+    x.map(|v| format!("{v:.prec$}")).unwrap_or_default()
 }
 
 /// A number for tables: empty for NaN/None, else `{:.prec$}`.

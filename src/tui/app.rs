@@ -451,6 +451,10 @@ impl App {
                     let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
                     self.start_overlay(i);
                 }
+                KeyCode::Char('C') if !self.session.logs.is_empty() => {
+                    let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
+                    self.start_calibration(i);
+                }
                 _ => {}
             },
             PaneId::Yield if k.code == KeyCode::Char('r') && !self.session.images.is_empty() => {

@@ -46,6 +46,11 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ("Overlay", "n p  → ←", "next / previous cycle"),
     ("Overlay", "a", "envelope of all cycles"),
     (
+        "Overlay",
+        "C",
+        "calibrate the log against the model (background, a few seconds)",
+    ),
+    (
         "Model",
         "Enter  e",
         "edit the selected value (Enter applies, Esc cancels)",
