@@ -187,6 +187,30 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     sync_dir(&dir)
 }
 
+/// Publishes one file of a stream that a reader picks up as files appear
+/// (a camera's photographs, `pinsight rig-sim --images`): written to a
+/// hidden temporary in the same folder and renamed into place, so a reader
+/// sees it whole or not at all. Not fsynced: a stream of many small files
+/// would wait on the disk for each, and a power loss may lose the last
+/// ones (use [`write_file`] for results that must survive it). The folder
+/// must exist.
+pub fn publish_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let (dir, name) = split(path)?;
+    let tmp = temp_path(&dir, &name);
+    let r = (|| {
+        let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+        f.write_all(bytes)
+    })();
+    if let Err(e) = r {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(stage_error(path, &dir, bytes.len() as u64, e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        OutputError::io(path, e)
+    })
+}
+
 /// How a [`Report`] reaches its folder.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CommitMode {
