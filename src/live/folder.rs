@@ -36,6 +36,8 @@ pub struct FolderTail {
     seen: HashMap<PathBuf, SystemTime>,
     watermark: Option<SystemTime>,
     pub missing: bool,
+    /// Images found but not settled yet (looked at again at every scan).
+    pending: Vec<(PathBuf, SystemTime)>,
     /// The folder was there at some scan.
     ever: bool,
     /// Images present at the first scan are read too (the run's backlog);
@@ -56,6 +58,7 @@ impl FolderTail {
             seen: HashMap::new(),
             watermark: None,
             missing: false,
+            pending: Vec::new(),
             ever: false,
             first: true,
         }
@@ -140,15 +143,21 @@ impl FolderTail {
         }
         let now = SystemTime::now();
         let settle = Duration::from_millis(SETTLE_MS);
+        files.append(&mut self.pending);
         files.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+        files.dedup_by(|a, b| a.0 == b.0);
         let mut newest_log: Option<PathBuf> = None;
+        let mut held = false;
         for (p, m) in files {
             if self.watermark.is_some_and(|w| m <= w) || self.seen.get(&p) == Some(&m) {
                 continue;
             }
             let is_log = ext(&p) == "mcap";
-            if !is_log && now.duration_since(m).unwrap_or_default() < settle {
-                continue; // not settled: seen again at the next poll
+            if !is_log && (held || now.duration_since(m).unwrap_or_default() < settle) {
+                // Not settled (or after one that is not): in order, later.
+                held = true;
+                self.pending.push((p, m));
+                continue;
             }
             if is_log && self.seen.contains_key(&p) {
                 continue; // a growing log is followed, not found again
