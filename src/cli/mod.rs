@@ -7,6 +7,7 @@ use std::process::ExitCode;
 pub mod batch;
 pub mod calibrate;
 pub mod common;
+pub mod demo;
 pub mod inspect;
 pub mod log;
 pub mod merge;
@@ -62,6 +63,8 @@ pub enum Command {
     Methods(methods::Args),
     /// Open the terminal workstation on the given files.
     Tui(tui::Args),
+    /// The demo: the embedded session, or `--live` a simulated line followed live.
+    Demo(demo::Args),
     /// Follow rig logs being written and folders where images arrive (headless; JSON lines).
     Watch(watch::Args),
     /// A simulated rig writing its log (and connector photographs) in real time.
@@ -107,6 +110,7 @@ pub fn main() -> ExitCode {
         Some(Command::Methods(a)) => methods::run(a),
         Some(Command::Tui(a)) => tui::run(a),
         Some(Command::Watch(a)) => watch::run(a),
+        Some(Command::Demo(a)) => demo::run(a),
         Some(Command::RigSim(a)) => rig_sim::run(a),
         Some(Command::Render(a)) => render::run(a),
         Some(Command::Batch(a)) => batch::run(a),
