@@ -70,8 +70,8 @@ impl LiveDecoder {
             }
         }
         for c in channels {
-            if !self.channels.contains_key(&c.id) {
-                self.channels.insert(c.id, c);
+            if let std::collections::btree_map::Entry::Vacant(e) = self.channels.entry(c.id) {
+                e.insert(c);
                 changed = true;
             }
         }

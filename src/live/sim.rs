@@ -171,6 +171,13 @@ impl Default for SimOptions {
     }
 }
 
+/// A pooled photograph: the fault drawn, debris, the variant.
+type PoolKey = (
+    Option<crate::rig::synth::faults::InsertionFault>,
+    bool,
+    usize,
+);
+
 /// One connector as written.
 #[derive(Debug, Clone, Serialize)]
 pub struct SimConnector {
@@ -456,14 +463,7 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
     let mut next_rotate = opts.rotate_s;
     let mut corrupt_at = opts.faults.corrupt_at_s;
     let mut debris_rng = crate::rng::SplitMix64::<0xDEB0_1500_0000_0018>::new(opts.seed);
-    let mut pool: HashMap<
-        (
-            Option<crate::rig::synth::faults::InsertionFault>,
-            bool,
-            usize,
-        ),
-        (std::sync::Arc<Vec<u8>>, Verdict),
-    > = HashMap::new();
+    let mut pool: HashMap<PoolKey, (std::sync::Arc<Vec<u8>>, Verdict)> = HashMap::new();
     let mut error: Option<String> = None;
     let mut images_ok = opts.images.is_some();
     let stem = opts

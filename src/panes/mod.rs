@@ -23,6 +23,7 @@ pub mod chart;
 pub mod demo;
 pub mod line;
 pub mod live;
+pub mod live_state;
 pub mod methods;
 pub mod model;
 pub mod overlay;

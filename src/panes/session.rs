@@ -70,7 +70,7 @@ pub struct Session {
     /// changed since), or why it could not run.
     pub trend: Option<Result<std::sync::Arc<crate::wear::TrendReport>, String>>,
     /// The live line being followed (`tui --follow`, `demo --live`).
-    pub live: Option<super::live::LiveState>,
+    pub live: Option<super::live_state::LiveState>,
 }
 
 impl Default for Session {

@@ -188,7 +188,7 @@ pub fn view(s: &Session, ui: &PaneState) -> SessionView {
         model_status,
         display: s.display.clone(),
         live: s.live.as_ref().map(|l| LiveView {
-            status: l.status(s),
+            status: l.status(s.yields.as_ref().and_then(|y| y.report.yield_frac)),
             following: ui.follow,
             alarms: l.active_alarms.iter().map(|a| a.to_string()).collect(),
             last_alarm: l.last_alarm.clone(),

@@ -121,7 +121,12 @@ impl App {
                 .as_ref()
                 .map(|l| super::draw::LiveIndicator {
                     following: self.ui.follow,
-                    text: l.status(&self.session),
+                    text: l.status(
+                        self.session
+                            .yields
+                            .as_ref()
+                            .and_then(|y| y.report.yield_frac),
+                    ),
                     alarm: !l.active_alarms.is_empty(),
                 }),
         }
