@@ -187,21 +187,15 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     sync_dir(&dir)
 }
 
-/// Publishes one file of a stream that a reader picks up as files appear
-/// (a camera's photographs, `pinsight rig-sim --images`): written to a
-/// hidden temporary in the same folder and renamed into place, so a reader
-/// sees it whole or not at all. Not fsynced: a stream of many small files
-/// would wait on the disk for each, and a power loss may lose the last
-/// ones (use [`write_file`] for results that must survive it). The folder
-/// must exist.
+/// Publishes one file of a stream read as it appears (camera photographs,
+/// `rig-sim --images`): a hidden temporary renamed into place, so a reader
+/// sees it whole or not at all; not fsynced (many small files; a power loss
+/// may lose the last ones). The folder must exist.
 pub fn publish_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     let (dir, name) = split(path)?;
     let tmp = temp_path(&dir, &name);
-    let r = (|| {
-        let mut f = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
-        f.write_all(bytes)
-    })();
-    if let Err(e) = r {
+    let r = OpenOptions::new().write(true).create_new(true).open(&tmp);
+    if let Err(e) = r.and_then(|mut f| f.write_all(bytes)) {
         let _ = std::fs::remove_file(&tmp);
         return Err(stage_error(path, &dir, bytes.len() as u64, e));
     }
