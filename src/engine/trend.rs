@@ -6,7 +6,7 @@
 //! ([`crate::wear`]). The one path of `pinsight trend`, the Trend pane,
 //! `render trend` and batch `run trend`.
 
-use crate::overlay::calibrate::{CalibrateOptions, calibrate};
+use crate::overlay::calibrate::CalibrateOptions;
 use crate::overlay::compare::model_params;
 use crate::progress::Progress;
 use crate::rig::LoadOptions;
@@ -173,8 +173,14 @@ pub fn calibrate_log(
     if log.signals.displacement.is_none() {
         return Err("no displacement channel: the clearance cannot be calibrated".into());
     }
-    let r = calibrate(&log, &cs, &base, &opts.calibrate, &Progress::hidden())
-        .map_err(|e| e.to_string())?;
+    let r = super::calibrate::calibrate_job(
+        &log,
+        &cs,
+        None,
+        &[],
+        &opts.calibrate,
+        &Progress::hidden(),
+    )?;
     let e = r
         .estimates
         .iter()
