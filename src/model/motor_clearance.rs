@@ -177,6 +177,7 @@ impl MotorClearanceModel {
             alpha3,
             f_n,
             f_t,
+            v_slip: v_t,
             m12,
             delta,
             delta_dot,
