@@ -5,12 +5,63 @@
 //! curves, budgets and the stall event are written once.
 //!
 //! The state's layout is the model's own; the loop reaches into it only
-//! through these methods and the two quadrature indices.
+//! through these methods and the two quadrature indices. The mode and the
+//! outputs every such model reports live here (below the models).
 
-use super::clearance::{Mode, Outputs};
 use super::contact::ProcessMode;
 use crate::solver::Tolerance;
+use serde::Serialize;
 use std::cell::Cell;
+
+/// Free flight or contact, and what the part does to the pin bar (stick
+/// law), as set by the event logic.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct Mode {
+    pub in_contact: bool,
+    /// δ̇ at the onset of the current contact (m/s).
+    pub approach: f64,
+    /// Stick law: resisting down or up, or holding (regularized: unused).
+    pub process: ProcessMode,
+}
+
+/// Everything the model knows at one instant (for outputs and figures).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Outputs {
+    pub t: f64,
+    pub theta2: f64,
+    /// Crank speed ω2 (rad/s) and acceleration α2 (rad/s²).
+    pub omega2: f64,
+    pub alpha2: f64,
+    /// Torque of the motor at its shaft (N·m); NaN without a motor.
+    pub motor_torque: f64,
+    /// Stroke s = x4 − x4_TDC (m), velocity (m/s), acceleration (m/s²).
+    pub s: f64,
+    pub v4: f64,
+    pub a4: f64,
+    pub alpha3: f64,
+    /// Contact normal force (N) and friction (N, on the pin bar along t).
+    pub f_n: f64,
+    pub f_t: f64,
+    /// Tangential slip speed at the contact point (m/s), v_t of model.md:
+    /// (v_P − v_B)·t − ω3·R_B, whether or not in contact (Archard wear
+    /// integrates F_N·|v_t|).
+    pub v_slip: f64,
+    /// Drive torque (N·m).
+    pub m12: f64,
+    /// Penetration δ = e − c (m) and its rate (m/s).
+    pub delta: f64,
+    pub delta_dot: f64,
+    /// Eccentricity e = P − B (m).
+    pub ecc: [f64; 2],
+    /// Process force on the pin bar along x (N); the load cell reads −this.
+    pub process_force: f64,
+    /// The ideal mechanism at the same crank angle.
+    pub ideal_s: f64,
+    pub ideal_v: f64,
+    pub ideal_a: f64,
+    pub ideal_m12: f64,
+    pub ideal_process_force: f64,
+}
 
 /// A mechanism model integrated by the event loop.
 pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
@@ -90,8 +141,11 @@ pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
 /// per step less.
 #[derive(Debug, Clone, Default)]
 pub struct EndCache<const N: usize> {
-    last: Cell<Option<(f64, [f64; N], Mode, Outputs)>>,
+    last: Cell<Option<EndOfStep<N>>>,
 }
+
+/// (t, y, mode, outputs) of an end-of-step evaluation.
+type EndOfStep<const N: usize> = (f64, [f64; N], Mode, Outputs);
 
 impl<const N: usize> EndCache<N> {
     #[inline]

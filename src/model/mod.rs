@@ -10,6 +10,7 @@ pub mod kinetostatics;
 pub mod materials;
 pub mod motor;
 pub mod motor_clearance;
+pub mod motor_params;
 pub mod motor_rigid;
 pub mod param_error;
 pub mod param_table;

@@ -21,6 +21,7 @@
 
 use super::choices::{MotorCurve, SpeedControl};
 use super::kinetostatics::{IdealForces, Kinetostatics};
+pub use super::motor_params::MotorParams;
 use super::params::Params;
 use super::table::Table;
 use crate::solver::Scale;
@@ -46,51 +47,6 @@ pub const D_LEN: usize = 12;
 /// A crank turning slower than this fraction of its operating speed has
 /// stalled.
 pub const STALL_FRACTION: f64 = 0.01;
-
-/// The motor keys of a parameter set (user units where the key has them:
-/// rev/min for speeds; SI otherwise).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct MotorParams {
-    pub curve: MotorCurve,
-    /// Linear curve: torque at standstill (N·m, motor shaft) …
-    pub stall_torque: f64,
-    /// … and no-load speed (rev/min of the motor; 0 = auto: chosen so the
-    /// head runs at `motor_rpm` on average).
-    pub no_load_rpm: f64,
-    /// Table curve: (motor rev/min, N·m), speeds strictly increasing; the
-    /// torque holds its end values outside.
-    pub torque_table: Table,
-    /// Rotor inertia at the motor shaft, kg m².
-    pub rotor_inertia: f64,
-    /// Flywheel inertia on the crank shaft, kg m².
-    pub flywheel_inertia: f64,
-    /// Gear efficiency η.
-    pub efficiency: f64,
-    pub control: SpeedControl,
-    /// PI gains at the motor shaft: N·m per rad/s, N·m per rad.
-    pub kp: f64,
-    pub ki: f64,
-}
-
-impl Default for MotorParams {
-    /// A small induction-type motor on its linear curve (the no-load speed
-    /// set so the head runs at `motor_rpm` on average), direct drive, no
-    /// flywheel, no speed control (docs/motor.md).
-    fn default() -> Self {
-        Self {
-            curve: MotorCurve::Linear,
-            stall_torque: 2.0,
-            no_load_rpm: 0.0,
-            torque_table: Table::zero(),
-            rotor_inertia: 2.0e-5,
-            flywheel_inertia: 0.0,
-            efficiency: 1.0,
-            control: SpeedControl::None,
-            kp: 0.02,
-            ki: 0.5,
-        }
-    }
-}
 
 /// The motor's torque–speed curve at its shaft, speeds in rad/s.
 #[derive(Debug, Clone, PartialEq, Serialize)]

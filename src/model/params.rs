@@ -8,7 +8,7 @@
 //! an optional `preset = "paper" | "flores"` as its base.
 
 use super::materials::Material;
-pub use super::motor::MotorParams;
+pub use super::motor_params::MotorParams;
 pub use super::param_table::{PARAM_SPECS, ParamSpec, physical_range, spec, within};
 use super::table::Table;
 pub use crate::fmt::fmt_num;
@@ -736,58 +736,6 @@ mod tests {
             assert!(msg.contains(key), "{set}: {msg}");
             assert!(msg.contains("allowed"), "{set}: {msg}");
         }
-    }
-
-    /// The motor keys: each bad value names its key and range; the
-    /// relations (a table curve needs a table, PI needs kp > 0) name both
-    /// keys; `auto` is 0; a table round-trips.
-    #[test]
-    fn motor_keys_name_key_and_range() {
-        let cases: &[(&str, &str)] = &[
-            ("gear_efficiency=0", "gear_efficiency"),
-            ("gear_efficiency=1.2", "gear_efficiency"),
-            ("motor_stall_torque_nm=-1", "motor_stall_torque_nm"),
-            ("motor_stall_torque_nm=0", "motor_stall_torque_nm"),
-            ("motor_no_load_rpm=0.5", "motor_no_load_rpm"),
-            ("motor_no_load_rpm=-3", "motor_no_load_rpm"),
-            ("flywheel_inertia_kgm2=1e5", "flywheel_inertia_kgm2"),
-            ("rotor_inertia_kgm2=-1e-6", "rotor_inertia_kgm2"),
-            ("speed_kp_nms=-1", "speed_kp_nms"),
-            ("speed_ki_nm=nan", "speed_ki_nm"),
-            ("motor_curve=cubic", "motor_curve"),
-            ("speed_control=pid", "speed_control"),
-            ("motor_torque_table=[[0,1],[0,2]]", "motor_torque_table"),
-            ("motor_torque_table=[[0,1],[-5,2]]", "motor_torque_table"),
-            ("motor_torque_table=[[0,1e6]]", "motor_torque_table"),
-        ];
-        for (set, key) in cases {
-            let mut p = Params::paper();
-            let msg = p.apply_overrides(&[*set]).unwrap_err().to_string();
-            assert!(msg.contains(key) && msg.contains("allowed"), "{set}: {msg}");
-        }
-        let mut p = Params::paper();
-        let msg = p
-            .apply_overrides(&["motor_curve=table"])
-            .unwrap_err()
-            .to_string();
-        assert!(msg.contains("motor_torque_table"), "{msg}");
-        let mut p = Params::paper();
-        let msg = p
-            .apply_overrides(&["speed_control=pi", "speed_kp_nms=0"])
-            .unwrap_err()
-            .to_string();
-        assert!(msg.contains("speed_kp_nms"), "{msg}");
-        let mut p = Params::paper();
-        p.apply_overrides(&[
-            "driver=motor",
-            "motor_no_load_rpm=0",
-            "motor_curve=table",
-            "motor_torque_table=[[0, 2.5], [1000, 1.0], [1500, 0]]",
-            "flywheel_inertia_kgm2=0.01",
-        ])
-        .unwrap();
-        let q = Params::from_toml_str(&p.to_toml()).unwrap();
-        assert_eq!(p, q);
     }
 
     #[test]

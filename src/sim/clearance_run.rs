@@ -12,6 +12,12 @@
 //! 4. in the reported window, sample the curves on the crank-angle grid and
 //!    track continuous-time peaks (refined with Brent on the dense output
 //!    around every discrete local maximum that may beat the record).
+//!
+//! The file reads best whole: `run_model` is one state machine over one
+//! stepper and one state (the step, the event search and its location, the
+//! mode switches of contact, stick and stall, the grid samples and the peak
+//! refinement), and the helpers above it exist only for that loop. Split,
+//! the loop's state would travel back and forth between files.
 
 use super::summary::{
     NQ, PeakTracker, Q_ACC, Q_DS, Q_DV, Q_FN, Q_M12, Q_PEN, Q_PROC, Q_SMAX, Q_SMIN, quantities,

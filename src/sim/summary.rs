@@ -61,10 +61,64 @@ pub struct Summary {
     pub double_crossings_caught: u64,
     /// Level `motor`: speed ripple, motor torque and the energy balance.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub motor: Option<super::motor_run::MotorSummary>,
+    pub motor: Option<MotorSummary>,
     /// Stick law: how often the part held the pin bar, and the steps it took.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stick: Option<StickSummary>,
+}
+
+/// Energy over the reported window (J): the motor's work at its shaft
+/// against where it went.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EnergyBalance {
+    pub motor_work_j: f64,
+    pub gear_loss_j: f64,
+    pub guide_friction_j: f64,
+    pub process_work_j: f64,
+    /// Absorbed in the clearance joint by impacts (contact hysteresis) and
+    /// joint friction.
+    pub impact_and_joint_friction_j: f64,
+    /// Change of kinetic energy (rotor, flywheel, crank, rod, pin bar),
+    /// of potential energy (gravity) and of elastic contact energy.
+    pub kinetic_change_j: f64,
+    pub potential_change_j: f64,
+    pub elastic_change_j: f64,
+    /// Motor work − every term above: zero up to the integration error.
+    pub residual_j: f64,
+}
+
+/// The motor level's own figures (model.md, "Summary figures" plus the
+/// ripple and the motor's duty).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MotorSummary {
+    pub curve: String,
+    pub control: String,
+    /// The operating crank speed the run started from (rev/min).
+    pub operating_crank_rpm: f64,
+    /// Linear curve: the motor's no-load speed as given or chosen (`auto`).
+    pub no_load_rpm: Option<f64>,
+    /// Rotor + flywheel inertia referred to the crank, kg m².
+    pub drive_inertia_kgm2: f64,
+    /// Crank speed over the reported window (rev/min): time mean, min, max.
+    pub mean_crank_rpm: f64,
+    pub min_crank_rpm: f64,
+    pub max_crank_rpm: f64,
+    /// Speed ripple: peak-to-peak over the mean, %.
+    pub ripple_p2p_pct: f64,
+    /// First harmonic of the crank speed over crank angle, % of the mean
+    /// (the rig logs' `ripple %`), and the crank angle after top dead
+    /// centre where it peaks (None over less than one revolution).
+    pub ripple_h1_pct: Option<f64>,
+    pub ripple_h1_phase_deg: Option<f64>,
+    /// The motor's duty at its shaft: peak |torque|, RMS torque (what
+    /// heats it), mean power.
+    pub peak_motor_torque_nm: f64,
+    pub rms_motor_torque_nm: f64,
+    pub mean_motor_power_w: f64,
+    /// The torque the curve gives at the mean motor speed (the margin to
+    /// the RMS demand), N·m.
+    pub curve_torque_at_mean_nm: f64,
+    pub energy: EnergyBalance,
 }
 
 /// The stick law's events over the whole run (warm-up included): the
