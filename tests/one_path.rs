@@ -227,6 +227,67 @@ fn simulate_figures_are_one_answer_from_cli_and_the_model_pane() {
     }
 }
 
+/// The motor level (θ2 free, driven by the motor's curve through the
+/// gear, with the clearance joint) is one answer too: its summary figures
+/// and the motor's block (speed ripple, torque, energy balance) agree from
+/// `simulate`, `render model` and a batch export after a `set` step.
+#[test]
+fn the_motor_level_is_one_answer_from_cli_render_and_batch() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sets = ["--set", "driver=motor", "--set", "clearance_mm=0.1"];
+    let cli = run_json(
+        &[&["simulate", "--level", "motor", "--json"][..], &sets[..]].concat(),
+        d,
+    );
+    let render = run_json(
+        &[
+            &["render", "model", "--level", "motor", "--format", "json"][..],
+            &sets[..],
+        ]
+        .concat(),
+        d,
+    );
+    let script = "[[step]]\nkind = \"set\"\nlevel = \"motor\"\nvalues = { driver = \"motor\", clearance_mm = 0.1 }\n\n[[step]]\nkind = \"export\"\npane = \"model\"\npath = \"model.json\"\n";
+    std::fs::write(d.join("script.toml"), script).unwrap();
+    let o = bin()
+        .arg("batch")
+        .arg(d.join("script.toml"))
+        .arg("--out")
+        .arg(d.join("batch-out"))
+        .output()
+        .unwrap();
+    let text = std::fs::read_to_string(d.join("batch-out/model.json")).unwrap_or_else(|e| {
+        panic!(
+            "batch export of model: {e}\n{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    let batch: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(cli["level"], "motor", "{cli:#}");
+    let motor = &cli["motor"];
+    for key in [
+        "ripple_p2p_pct",
+        "ripple_h1_pct",
+        "peak_motor_torque_nm",
+        "energy",
+    ] {
+        assert!(!motor[key].is_null(), "simulate --json: motor has no {key}");
+    }
+    for key in [
+        "level",
+        "n_impacts",
+        "peak_accel_mps2",
+        "disp_dev_mean_mm",
+        "peak_torque_nm",
+        "motor",
+    ] {
+        assert_eq!(render["summary"][key], cli[key], "render model: {key}");
+        assert_eq!(batch["summary"][key], cli[key], "batch export: {key}");
+    }
+}
+
 #[test]
 fn a_bad_recipe_is_one_answer_from_cli_render_and_batch() {
     let dir = image_set();

@@ -395,7 +395,7 @@ impl Runner {
             }
             if let Some(l) = str_of(t, "level")? {
                 s.level = LevelChoice::parse(l).ok_or_else(|| {
-                    format!("level `{l}` (allowed: auto, kinematic, ideal, clearance)")
+                    format!("level `{l}` (allowed: auto, kinematic, ideal, clearance, motor)")
                 })?;
                 what.push(format!("level {l}"));
             }

@@ -39,7 +39,7 @@ pub struct Cli {
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Simulate the mechanism (kinematic, ideal or clearance-joint model).
+    /// Simulate the mechanism (kinematic, ideal, clearance-joint or motor-driven model).
     Simulate(simulate::Args),
     /// Run the parameter study (clearance × speed × material) in parallel.
     Sweep(sweep::Args),

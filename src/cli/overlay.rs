@@ -129,7 +129,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(LevelChoice::Fixed(l)) => Some(l),
         Some(LevelChoice::Auto) => None,
         None => bail!(
-            "invalid --level `{}` (allowed: auto, kinematic, ideal, clearance)",
+            "invalid --level `{}` (allowed: auto, kinematic, ideal, clearance, motor)",
             args.level
         ),
     };

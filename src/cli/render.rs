@@ -24,7 +24,7 @@ pub struct Args {
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub params: super::common::ParamArgs,
-    /// Fidelity level: auto, kinematic, ideal or clearance.
+    /// Fidelity level: auto, kinematic, ideal, clearance or motor (with driver = "motor").
     #[arg(long)]
     pub level: Option<String>,
     /// A pane UI option, e.g. `--ui study.factor=speed`, `--ui signals.t0=0.05` (repeatable; `--ui help` lists them).

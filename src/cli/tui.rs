@@ -11,7 +11,7 @@ pub struct Args {
     pub paths: Vec<String>,
     #[command(flatten)]
     pub params: super::common::ParamArgs,
-    /// Fidelity level: auto, kinematic, ideal or clearance.
+    /// Fidelity level: auto, kinematic, ideal, clearance or motor (with driver = "motor").
     #[arg(long)]
     pub level: Option<String>,
     /// Images in the terminal: auto (kitty / sixel / iTerm2 when the terminal has it, else half-blocks), halfblocks, off.
@@ -54,7 +54,9 @@ pub fn build_session(
     }
     if let Some(l) = level {
         s.level = crate::sim::LevelChoice::parse(l).ok_or_else(|| {
-            anyhow::anyhow!("invalid --level `{l}` (allowed: auto, kinematic, ideal, clearance)")
+            anyhow::anyhow!(
+                "invalid --level `{l}` (allowed: auto, kinematic, ideal, clearance, motor)"
+            )
         })?;
     }
     Ok(s)

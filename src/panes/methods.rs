@@ -197,10 +197,7 @@ pub fn view(s: &Session, ui: &PaneState) -> MethodsView {
                 (
                     f.clearance_mm,
                     f.motor_rpm,
-                    match f.flywheel_kgm2 {
-                        Some(j) => format!("{} (motor-driven, flywheel {j} kg m²)", f.chosen.name()),
-                        None => f.chosen.name().to_string(),
-                    },
+                    f.chosen.name().to_string(),
                     f.reason.clone(),
                 )
             })

@@ -166,8 +166,10 @@ pub struct FidelityStep {
     /// Step to `motor`: the crank speed's first harmonic, %.
     pub speed_ripple_pct: Option<f64>,
     pub invisible: bool,
-    /// The upper rung's cost per revolution, ms.
-    pub cost_ms_per_rev: Option<f64>,
+    /// The upper rung's cost: right-hand side evaluations per revolution
+    /// (a count, the same on every machine and run; the wall time is in
+    /// the fidelity report's costs).
+    pub cost_evals_per_rev: Option<f64>,
 }
 
 impl FidelityStep {
@@ -175,6 +177,14 @@ impl FidelityStep {
     /// sensors see it, its cost.
     pub fn line(&self) -> String {
         let mut parts = vec![self.step.clone()];
+        if self.stroke_diff_mm.is_none()
+            && self.force_diff_n.is_none()
+            && self.speed_ripple_pct.is_none()
+        {
+            // The motor rung of a constant-speed head: nothing to weigh.
+            parts.push("not weighed (driver = constant_speed)".into());
+            return parts.join("  ");
+        }
         if let Some(r) = self.speed_ripple_pct {
             parts.push(format!("ripple {r:.3} %"));
         }
@@ -185,8 +195,8 @@ impl FidelityStep {
             parts.push(format!("ΔF {f:.3} N"));
         }
         parts.push(if self.invisible { "unseen" } else { "seen" }.into());
-        if let Some(c) = self.cost_ms_per_rev {
-            parts.push(format!("{c:.2} ms/rev"));
+        if let Some(c) = self.cost_evals_per_rev {
+            parts.push(format!("{c:.0} evals/rev"));
         }
         parts.join("  ")
     }
@@ -307,7 +317,11 @@ fn figures(s: &Summary) -> Vec<FigureRow> {
                 format!("{:.3}", m.ripple_p2p_pct),
                 "0".into(),
             ),
-            f("ripple 1st harm. %", fmt_opt(m.ripple_h1_pct, 3), "0".into()),
+            f(
+                "ripple 1st harm. %",
+                fmt_opt(m.ripple_h1_pct, 3),
+                "0".into(),
+            ),
             f(
                 "motor torque pk/RMS",
                 format!("{:.3}/{:.3}", m.peak_motor_torque_nm, m.rms_motor_torque_nm),
@@ -382,11 +396,11 @@ pub fn view(s: &Session, ui: &PaneState) -> ModelView {
                 force_diff_n: st.force_diff_n,
                 speed_ripple_pct: st.speed_ripple_pct,
                 invisible: st.invisible,
-                cost_ms_per_rev: f
+                cost_evals_per_rev: f
                     .costs
                     .iter()
                     .find(|c| c.level == st.to)
-                    .map(|c| c.wall_ms_per_rev),
+                    .map(|c| c.rhs_evals_per_rev),
             })
             .collect(),
     });

@@ -427,4 +427,31 @@ mod tests {
         let s = &r.steps[1];
         assert!(s.stroke_diff_mm.unwrap() > 0.1, "{s:?}");
     }
+
+    /// The fourth rung. A motor without a flywheel ripples the crank speed
+    /// well above the 0.05 % the spindle channel resolves: the chooser
+    /// takes the motor level. A 0.05 kg m² flywheel (2500× the rotor's
+    /// inertia) holds the ripple below it: the chooser stays with the
+    /// clearance level and says the ripple is unseen. A constant-speed
+    /// driver leaves the rung blank.
+    #[test]
+    fn the_motor_rung_is_chosen_when_the_spindle_sees_the_ripple() {
+        let mut p = Params::paper();
+        p.clearance = 0.1e-3;
+        let r = assess(&p, SceneResolution::default(), Method::Dop853).unwrap();
+        assert_eq!(r.chosen, Level::Clearance, "{}", r.reason);
+        assert_eq!(r.steps[2].speed_ripple_pct, None, "{:?}", r.steps[2]);
+        p.driver = Driver::Motor;
+        let r = assess(&p, SceneResolution::default(), Method::Dop853).unwrap();
+        assert_eq!(r.chosen, Level::Motor, "{}", r.reason);
+        let ripple = r.steps[2].speed_ripple_pct.unwrap();
+        assert!(ripple > 0.1, "{:?}", r.steps[2]);
+        assert!(r.costs.iter().any(|c| c.level == Level::Motor), "{r:?}");
+        p.motor.flywheel_inertia = 0.05;
+        let r = assess(&p, SceneResolution::default(), Method::Dop853).unwrap();
+        assert_eq!(r.chosen, Level::Clearance, "{}", r.reason);
+        let s = &r.steps[2];
+        assert!(s.speed_ripple_pct.unwrap() < 0.05 && s.invisible, "{s:?}");
+        assert!(r.reason.contains("speed ripple"), "{}", r.reason);
+    }
 }

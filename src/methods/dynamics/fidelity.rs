@@ -65,7 +65,12 @@ pub fn fidelity_map(effort: Effort) -> Vec<FidelityCell> {
                 chosen: r.chosen,
                 stroke_diff_mm: r.steps.get(1).and_then(|s| s.stroke_diff_mm),
                 force_diff_n: r.steps.get(1).and_then(|s| s.force_diff_n),
-                reason: r.reason,
+                // The pane's row is (clearance, speed, level, reason): a
+                // motor-driven head says so in its reason.
+                reason: match fly {
+                    Some(j) => format!("motor-driven, flywheel {j} kg m²: {}", r.reason),
+                    None => r.reason,
+                },
                 flywheel_kgm2: fly,
                 speed_ripple_pct: r.steps.get(2).and_then(|s| s.speed_ripple_pct),
             });
