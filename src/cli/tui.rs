@@ -20,6 +20,9 @@ pub struct Args {
     /// Pane to start on (session, signals, overlay, model, study, vision, yield, methods, line, trend).
     #[arg(long, default_value = "session")]
     pub pane: String,
+    /// Config file (key bindings, colours, mouse capture; docs/tui.md). Default: $XDG_CONFIG_HOME/pinsight/config.toml, else ~/.config/pinsight/config.toml.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<std::path::PathBuf>,
 }
 
 /// The session `tui` and `render` open: the demo when no path is given,
@@ -87,6 +90,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             images,
             theme: None,
             pane,
+            config: args.config,
         },
     )?;
     Ok(ExitCode::SUCCESS)
