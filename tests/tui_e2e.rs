@@ -146,7 +146,7 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     t.keys(&["7"]);
     t.wait_for("yield 25.0 %", 10.0);
     t.keys(&["3", "n"]);
-    t.wait_for("stroke — cycle 0", 10.0);
+    t.wait_for("stroke (mm) — cycle 0", 10.0);
     t.keys(&["8"]);
     t.wait_for("Charts (", 30.0); // the quick methods lab ran in the background
     // The Line pane: the demo log's 20 cycles against its process recipe.

@@ -6,6 +6,8 @@
 //! - [`draw`]: the screen (tabs, status line, help, prompt) and the image cache.
 //! - [`panes`]: drawing of each pane's view.
 //! - [`theme`]: colours (16-colour safe, `NO_COLOR`).
+//! - [`fit`]: labels fitted to their cells without cutting words (the
+//!   abbreviation table).
 //! - [`keys`]: every key, for the help overlay and the docs.
 //! - [`config`]: the technician's config file (key bindings, colours,
 //!   mouse capture; follow and alarm sections passed through).
@@ -20,6 +22,7 @@ pub mod app;
 pub mod clipboard;
 pub mod config;
 pub mod draw;
+pub mod fit;
 pub mod image_cache;
 pub mod input;
 pub mod jobs;
