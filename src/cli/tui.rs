@@ -20,7 +20,16 @@ pub struct Args {
     /// Pane to start on (session, signals, overlay, model, study, vision, yield, methods, line, trend).
     #[arg(long, default_value = "session")]
     pub pane: String,
-    /// Config file (key bindings, colours, mouse capture; docs/tui.md). Default: $XDG_CONFIG_HOME/pinsight/config.toml, else ~/.config/pinsight/config.toml.
+    /// Follow these logs (.mcap, while written) and folders (images, new logs) live.
+    #[arg(long, value_name = "PATH", num_args = 1..)]
+    pub follow: Vec<std::path::PathBuf>,
+    /// With --follow: poll every DURATION instead of file-system events (network shares).
+    #[arg(long, value_name = "DURATION")]
+    pub poll: Option<String>,
+    /// With --follow: vision recipe(s) of the images (default: the simulated line's connector).
+    #[arg(long = "recipe")]
+    pub recipes: Vec<std::path::PathBuf>,
+    /// Config file: key bindings, colours, mouse capture, [follow] defaults and [alarms] rules (docs/tui.md). Default: $XDG_CONFIG_HOME/pinsight/config.toml, else ~/.config/pinsight/config.toml.
     #[arg(long, value_name = "FILE")]
     pub config: Option<std::path::PathBuf>,
 }
@@ -84,13 +93,39 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "the TUI needs a terminal on stdin and stdout; use `pinsight render PANE` or `pinsight batch SCRIPT` for headless output"
         );
     }
+    // The one config file: keys, colours and mouse for the TUI, [follow]
+    // and [alarms] for following (its problems are findings on the Session
+    // pane, never a refusal to start).
+    let config = crate::tui::config::load(args.config.as_deref());
+    let follow = if args.follow.is_empty() {
+        None
+    } else {
+        Some(super::watch::inputs(
+            &args.follow,
+            &args.recipes,
+            None,
+            0,
+            config.config.follow_settings(),
+            args.poll.as_deref(),
+            &super::common::LogReadArgs {
+                channels: None,
+                meta: Vec::new(),
+            },
+        )?)
+    };
+    let session = if follow.is_some() && args.paths.is_empty() {
+        Session::new("live")
+    } else {
+        session
+    };
     crate::tui::run(
         session,
         crate::tui::Options {
             images,
             theme: None,
             pane,
-            config: args.config,
+            config: Some(config),
+            follow,
         },
     )?;
     Ok(ExitCode::SUCCESS)

@@ -22,6 +22,8 @@
 pub mod chart;
 pub mod demo;
 pub mod line;
+pub mod live;
+pub mod live_state;
 pub mod methods;
 pub mod model;
 pub mod overlay;
@@ -131,6 +133,10 @@ pub struct PaneState {
     pub methods: methods::MethodsUi,
     pub line: line::LineUi,
     pub trend: trend::TrendUi,
+    /// Live mode: the views follow the newest data (Signals' window slides,
+    /// Vision shows the latest connector). `F` toggles it, scrolling back
+    /// pauses it, `End`/`G` resumes it.
+    pub follow: bool,
 }
 
 impl PaneState {
@@ -148,6 +154,7 @@ impl PaneState {
             methods: Default::default(),
             line: Default::default(),
             trend: Default::default(),
+            follow: true,
         }
     }
 

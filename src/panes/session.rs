@@ -74,6 +74,8 @@ pub struct Session {
     /// The wear trend over the logs (None: not run, or the logs or recipes
     /// changed since), or why it could not run.
     pub trend: Option<Result<std::sync::Arc<crate::wear::TrendReport>, String>>,
+    /// The live line being followed (`tui --follow`, `demo --live`).
+    pub live: Option<super::live_state::LiveState>,
 }
 
 impl Default for Session {
@@ -109,6 +111,7 @@ impl Session {
             process_recipes: Vec::new(),
             monitor: None,
             trend: None,
+            live: None,
         }
     }
 

@@ -344,7 +344,11 @@ pub fn view(s: &Session, ui: &PaneState) -> SignalsView {
 /// The y axis title of a channel: its name and unit (`angle (rad)`; `(–)`
 /// for a channel without a unit).
 fn axis_title(name: &str, unit: &str) -> String {
-    let unit = if unit.trim().is_empty() { "–" } else { unit.trim() };
+    let unit = if unit.trim().is_empty() {
+        "–"
+    } else {
+        unit.trim()
+    };
     format!("{name} ({unit})")
 }
 

@@ -169,7 +169,11 @@ pub fn wrap(s: &str, w: usize) -> Vec<String> {
     let mut lines: Vec<String> = Vec::new();
     let mut cur = String::new();
     for word in s.split(' ').filter(|x| !x.is_empty()) {
-        let word = if width(word) > w { fit(word, w) } else { word.to_string() };
+        let word = if width(word) > w {
+            fit(word, w)
+        } else {
+            word.to_string()
+        };
         if !cur.is_empty() && width(&cur) + 1 + width(&word) > w {
             lines.push(std::mem::take(&mut cur));
         }
@@ -238,7 +242,10 @@ mod tests {
             "paper, flores"
         );
         // A unit is not an aside; an axis title keeps it.
-        assert_eq!(drop_asides("max stroke error (mm)"), "max stroke error (mm)");
+        assert_eq!(
+            drop_asides("max stroke error (mm)"),
+            "max stroke error (mm)"
+        );
         assert_eq!(fit("max stroke error (mm)", 17), "max stroke …");
         assert_eq!(fit_axis("max stroke error (mm)", 17), "max stroke … (mm)");
         assert_eq!(
@@ -258,7 +265,10 @@ mod tests {
         );
         // An identifier is cut after one of its parts; one long word
         // inside, marked.
-        assert_eq!(fit("approach_velocity_floor_mps", 20), "approach_velocity_…");
+        assert_eq!(
+            fit("approach_velocity_floor_mps", 20),
+            "approach_velocity_…"
+        );
         assert_eq!(fit("lankarani_nikravesh", 8), "lankara…");
         assert_eq!(fit("lankarani_nikravesh", 12), "lankarani_…");
         assert_eq!(fit("abc", 0), "");

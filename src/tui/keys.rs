@@ -38,6 +38,16 @@ pub const KEYS: &[(&str, &str, &str)] = &[
         "mouse",
         "with mouse = true in the config: click a tab; wheel scrolls (zooms on Signals)",
     ),
+    (
+        "live",
+        "F",
+        "follow the newest data on / off (tui --follow, demo --live)",
+    ),
+    (
+        "live",
+        "End  G",
+        "resume following (Signals, Vision); looking back pauses it",
+    ),
     ("Signals", "h l  ← →", "move the cursor"),
     ("Signals", "H L  Shift-← →", "pan half a window"),
     ("Signals", "+ -", "zoom in / out about the cursor"),

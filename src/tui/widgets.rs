@@ -3,7 +3,7 @@
 //! the view models hold.
 
 use super::fit;
-pub use super::fit::{fit_path as trunc_left, fit as trunc};
+pub use super::fit::{fit as trunc, fit_path as trunc_left};
 use super::theme::Theme;
 use crate::panes::chart::{BarsView, ChartView, MarkerKind, SeriesKind, runs};
 use ratatui::Frame;
@@ -487,7 +487,10 @@ pub fn kv_line<'a>(k: &str, v: impl Into<String>, theme: &Theme) -> Line<'a> {
 
 /// A bordered block whose title is fitted to `area` (never cut mid-word).
 pub fn block_in<'a>(area: Rect, title: &str, theme: &Theme) -> Block<'a> {
-    block(fit::fit(title, area.width.saturating_sub(2) as usize), theme)
+    block(
+        fit::fit(title, area.width.saturating_sub(2) as usize),
+        theme,
+    )
 }
 
 /// A wrapped paragraph of lines in a titled block.

@@ -59,7 +59,12 @@ pub const ACTIONS: &[Action] = &[
     a("down", "j", &["j", "Down"], "next row"),
     a("up", "k", &["k", "Up"], "previous row"),
     a("first", "g", &["g", "Home"], "first row"),
-    a("last", "G", &["G", "End"], "last row"),
+    a(
+        "last",
+        "G",
+        &["G", "End"],
+        "last row (live: resume following)",
+    ),
     a(
         "left",
         "h",

@@ -15,9 +15,17 @@
 //! quit = "x"                 # an action = a key or a list of keys
 //! down = ["j", "Down", "n"]
 //!
-//! [follow]                   # owned by live follow (passed through)
-//! [alarms]                   # owned by live follow (passed through)
+//! [follow]                   # live follow's defaults (docs/live.md)
+//! window_s = 600.0
+//!
+//! [alarms]                   # live follow's alarm rules (docs/live.md)
+//! bell = true
 //! ```
+//!
+//! `[follow]` and `[alarms]` are typed with live follow's own types
+//! ([`crate::live::FollowConfig`], [`crate::live::AlarmRules`]): the one
+//! config file feeds `tui --follow`, `demo --live` and (`--config` or this
+//! default path) `watch`.
 //!
 //! Reading never fails and never panics: a file that cannot be read or
 //! parsed, an unknown key, a bad value each become a [`Finding`] naming the
@@ -48,11 +56,10 @@ pub struct Config {
     pub depth: Option<ColorDepth>,
     pub palette: Palette,
     pub keys: KeyMap,
-    /// `[follow]`: owned by live follow (its own serde types, typed at
-    /// merge); kept here as read.
-    pub follow: Option<toml::Table>,
-    /// `[alarms]`: owned by live follow, like `[follow]`.
-    pub alarms: Option<toml::Table>,
+    /// `[follow]`: live follow's defaults (None: not in the file).
+    pub follow: Option<crate::live::FollowConfig>,
+    /// `[alarms]`: live follow's alarm rules (None: not in the file).
+    pub alarms: Option<crate::live::AlarmRules>,
 }
 
 /// A problem in a config file.
@@ -93,6 +100,15 @@ impl Config {
         };
         t.palette = self.palette;
         t
+    }
+
+    /// The follow defaults and alarm rules of the file (live follow's
+    /// defaults for a table the file does not hold).
+    pub fn follow_settings(&self) -> (crate::live::FollowConfig, crate::live::AlarmRules) {
+        (
+            self.follow.clone().unwrap_or_default(),
+            self.alarms.clone().unwrap_or_default(),
+        )
     }
 
     /// Parses a config file's text; `file` names it in the findings.
@@ -147,10 +163,28 @@ impl Config {
                     }
                     None => finding("keys", "must be a table ([keys])".into()),
                 },
-                "follow" | "alarms" => match value.as_table() {
-                    Some(t) if key == "follow" => cfg.follow = Some(t.clone()),
-                    Some(t) => cfg.alarms = Some(t.clone()),
-                    None => finding(key, format!("must be a table ([{key}])")),
+                // Typed by live follow's own serde types (unknown keys and
+                // bad values are theirs to name); a bad table is a finding
+                // and its defaults apply.
+                "follow" => match value.as_table() {
+                    Some(t) => match toml::Value::Table(t.clone()).try_into() {
+                        Ok(f) => cfg.follow = Some(f),
+                        Err(e) => finding(
+                            "follow",
+                            format!("{}; follow defaults used (docs/live.md)", one_line(&e)),
+                        ),
+                    },
+                    None => finding(key, "must be a table ([follow])".into()),
+                },
+                "alarms" => match value.as_table() {
+                    Some(t) => match toml::Value::Table(t.clone()).try_into() {
+                        Ok(a) => cfg.alarms = Some(a),
+                        Err(e) => finding(
+                            "alarms",
+                            format!("{}; default alarm rules used (docs/live.md)", one_line(&e)),
+                        ),
+                    },
+                    None => finding(key, "must be a table ([alarms])".into()),
                 },
                 other => finding(
                     other,
@@ -330,6 +364,11 @@ impl Loaded {
     }
 }
 
+/// A toml error as one line (its message without the source excerpt).
+fn one_line(e: &toml::de::Error) -> String {
+    e.message().trim().replace('\n', " ")
+}
+
 fn on_off(b: bool) -> &'static str {
     if b { "on" } else { "off" }
 }
@@ -352,9 +391,10 @@ series = ["red", "light-blue"]
 [keys]
 quit = "x"
 [follow]
-window = "10m"
-[alarms.yield]
-below = 0.9
+window_s = 600.0
+notify = false
+[alarms]
+bell = true
 "##,
             "cfg.toml",
         );
@@ -368,9 +408,14 @@ below = 0.9
         assert_eq!(c.palette.series[1], Color::LightBlue);
         assert_eq!(c.palette.series[2], Palette::LIGHT.series[2]);
         assert_eq!(c.keys.bound, vec![("quit", vec!["x".to_string()])]);
-        // Follow and alarms pass through untouched.
-        assert_eq!(c.follow.unwrap()["window"].as_str(), Some("10m"));
-        assert_eq!(c.alarms.unwrap()["yield"]["below"].as_float(), Some(0.9));
+        // Follow and alarms typed by live follow's types, the rest default.
+        let fc = c.follow.unwrap();
+        assert_eq!(fc.window_s, 600.0);
+        assert!(!fc.notify);
+        assert_eq!(fc.poll_s, crate::live::FollowConfig::default().poll_s);
+        let al = c.alarms.unwrap();
+        assert!(al.bell);
+        assert_eq!(al.rules, crate::live::AlarmRules::default().rules);
         let t = Config::parse("[theme]\ncolors = \"none\"", "x").0.theme();
         assert!(!t.colored());
     }
@@ -435,6 +480,34 @@ quit = "Hyper"
         assert_eq!(c.palette.title, Palette::DARK.title);
         assert!(!c.mouse);
         assert!(c.keys.is_identity());
+    }
+
+    #[test]
+    fn bad_follow_and_alarm_tables_are_findings_naming_the_key() {
+        let (c, f) = Config::parse(
+            "mouse = true\n[follow]\nwindow = \"10m\"\n[alarms]\nbell = \"loud\"\n",
+            "cfg.toml",
+        );
+        let all: Vec<String> = f.iter().map(|x| x.to_string()).collect();
+        assert_eq!(f.len(), 2, "{all:?}");
+        let has =
+            |start: &str, end: &str| all.iter().any(|f| f.starts_with(start) && f.ends_with(end));
+        assert!(
+            has(
+                "cfg.toml: `follow`: unknown field `window`, expected one of `window_s`",
+                "; follow defaults used (docs/live.md)"
+            ),
+            "{all:?}"
+        );
+        assert!(
+            has(
+                "cfg.toml: `alarms`: invalid type: string \"loud\", expected a boolean",
+                "; default alarm rules used (docs/live.md)"
+            ),
+            "{all:?}"
+        );
+        // The rest of the file still applies.
+        assert!(c.mouse && c.follow.is_none() && c.alarms.is_none());
     }
 
     #[test]

@@ -59,7 +59,7 @@ pub(super) fn sig4(x: Option<f64>) -> String {
                 format!("{v:.decimals$}")
             }
         }
-        Some(v) if v == 0.0 => "0".into(),
+        Some(0.0) => "0".into(),
         _ => "–".into(),
     }
 }

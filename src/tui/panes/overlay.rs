@@ -107,7 +107,12 @@ pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme)
             .collect();
         let widths = column_widths(
             table_area.width.saturating_sub(2),
-            &[Col::Auto(5, 6), Col::Auto(7, 9), Col::Auto(7, 9), Col::Fill(4)],
+            &[
+                Col::Auto(5, 6),
+                Col::Auto(7, 9),
+                Col::Auto(7, 9),
+                Col::Fill(4),
+            ],
             &content_widths(&header, &cells),
         );
         let rows: Vec<Row> = cells

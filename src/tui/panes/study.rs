@@ -39,14 +39,15 @@ pub(super) fn study(f: &mut Frame, area: Rect, v: &StudyView, theme: &Theme) {
     head_lines.push(Line::styled(v.setup.clone(), theme.muted()));
     let head_h: usize = head_lines
         .iter()
-        .map(|l| crate::tui::fit::wrap(&l.to_string(), area.width.max(1) as usize).len().max(1))
+        .map(|l| {
+            crate::tui::fit::wrap(&l.to_string(), area.width.max(1) as usize)
+                .len()
+                .max(1)
+        })
         .sum();
     let [head, body] =
         Layout::vertical([Constraint::Length(head_h as u16), Constraint::Min(4)]).areas(area);
-    f.render_widget(
-        Paragraph::new(head_lines).wrap(Wrap { trim: false }),
-        head,
-    );
+    f.render_widget(Paragraph::new(head_lines).wrap(Wrap { trim: false }), head);
     if !v.ran {
         let msg = match &v.error {
             Some(e) => e.clone(),

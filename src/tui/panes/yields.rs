@@ -126,7 +126,12 @@ pub(super) fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
             .collect();
         let widths = column_widths(
             wa.width.saturating_sub(2),
-            &[Col::Fill(8), Col::Auto(3, 5), Col::Auto(5, 7), Col::Auto(7, 10)],
+            &[
+                Col::Fill(8),
+                Col::Auto(3, 5),
+                Col::Auto(5, 7),
+                Col::Auto(7, 10),
+            ],
             &content_widths(&header, &cells),
         );
         let rows: Vec<Row> = cells
