@@ -377,7 +377,7 @@ fn vision_yield_and_overlay_run_on_the_worker_with_the_demo_data() {
     assert!(s.contains("envelope of 20 cycles"), "{s}");
     assert!(s.contains("stroke residual"), "{s}");
     app.update(key(KeyCode::Char('n')));
-    assert!(screen(&app, 120, 40).contains("stroke — cycle 0"));
+    assert!(screen(&app, 120, 40).contains("stroke (mm) — cycle 0"));
 }
 
 /// Cancelling the yield keeps partial work out and does not restart it

@@ -146,7 +146,7 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
     t.keys(&["7"]);
     t.wait_for("yield 25.0 %", 10.0);
     t.keys(&["3", "n"]);
-    t.wait_for("stroke — cycle 0", 10.0);
+    t.wait_for("stroke (mm) — cycle 0", 10.0);
     t.keys(&["8"]);
     t.wait_for("Charts (", 30.0); // the quick methods lab ran in the background
     // The Line pane: the demo log's 20 cycles against its process recipe.
@@ -338,4 +338,127 @@ fn tui_follows_a_live_line_pauses_resumes_and_shows_an_alarm() {
     t.wait("exit", 10.0, |_| t.pane_state().starts_with('1'));
     let _ = sim.kill();
     let _ = sim.wait();
+}
+
+/// Issue 18 items 6–7 as a new user meets them in a plain 80-column SSH
+/// terminal: `NO_COLOR`, the technician's config file from
+/// `$XDG_CONFIG_HOME` (quit remapped to `x`, a `[follow]` table), every
+/// pane at 80×24 and again at 200×60 with its axis titles and units and
+/// none of the labels the issue found cut, and `y` copying the selected
+/// row through tmux (`set-clipboard on` keeps OSC 52 in a tmux buffer).
+#[test]
+fn every_pane_at_80x24_and_200x60_no_color_config_and_copy() {
+    if !tmux_available() {
+        eprintln!("SKIPPED: tmux is not installed; the readability test did not run");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let cfg_dir = dir.path().join("pinsight");
+    std::fs::create_dir_all(&cfg_dir).unwrap();
+    std::fs::write(
+        cfg_dir.join("config.toml"),
+        "mouse = false\n[keys]\nquit = \"x\"\n[follow]\nwindow_s = 300.0\n[alarms]\nbell = false\n",
+    )
+    .unwrap();
+    let t = Tmux {
+        sock: format!("pinsight-e2e-fit-{}", std::process::id()),
+    };
+    let bin = env!("CARGO_BIN_EXE_pinsight");
+    let started = t.cmd(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "80",
+        "-y",
+        "24",
+        &format!(
+            "env TERM=xterm-256color NO_COLOR=1 XDG_CONFIG_HOME={} {bin} tui --images halfblocks",
+            dir.path().display()
+        ),
+    ]);
+    assert!(
+        started.status.success(),
+        "{}",
+        String::from_utf8_lossy(&started.stderr)
+    );
+    t.cmd(&["set-option", "-t", "e2e", "remain-on-exit", "on"]);
+    t.cmd(&["set-option", "-s", "set-clipboard", "on"]);
+    // The config was read: listed last on the Session pane, no finding.
+    let s = t.wait_for("model: clearance level", 20.0);
+    assert!(!s.contains("config:"), "no finding expected:\n{s}");
+    t.keys(&["G"]);
+    let s = t.wait_for("config.toml", 10.0);
+    let row = s.lines().find(|l| l.contains("config.toml")).unwrap();
+    assert!(
+        row.contains("loaded") && row.contains("TUI config"),
+        "{row}"
+    );
+    // Each pane: what must be on it (titles with units), at both sizes.
+    let panes: [(&str, &[&str]); 10] = [
+        ("1", &["Files (", "status"]),
+        ("2", &["time (s)", "displacement (mm)", "force (N)"]),
+        (
+            "3",
+            &[
+                "stroke (mm)",
+                "load-cell force (N)",
+                "crank angle from TDC (°)",
+            ],
+        ),
+        ("4", &["Parameters — preset paper", "rhs eval"]),
+        ("5", &["factor clearance", "quantity stroke"]),
+        ("6", &["verdict: FAIL", "Pins (20)"]),
+        ("7", &["Wilson", "Worst pins"]),
+        ("8", &["Charts (", "(mm)"]),
+        ("9", &["Cycles of", "SPC"]),
+        ("T", &["calibrated"]),
+    ];
+    for (w, h) in [(80u16, 24u16), (200, 60)] {
+        if w != 80 {
+            t.cmd(&[
+                "resize-window",
+                "-t",
+                "e2e",
+                "-x",
+                &w.to_string(),
+                "-y",
+                &h.to_string(),
+            ]);
+        }
+        for (key, texts) in panes {
+            t.keys(&[key]);
+            let s = t.wait(&format!("pane {key} at {w}×{h}: {texts:?}"), 60.0, |s| {
+                texts.iter().all(|x| s.contains(x))
+            });
+            let lines: Vec<&str> = s.lines().collect();
+            assert!(lines.len() <= h as usize, "{w}×{h}:\n{s}");
+            for l in &lines {
+                assert!(l.chars().count() <= w as usize, "{w}×{h}: `{l}`");
+            }
+            // The cut labels the issue found, and no escape left by NO_COLOR.
+            for bad in ["rhs evaluati ", "preset paper (r", "\u{1b}["] {
+                assert!(!s.contains(bad), "{w}×{h} pane {key}: `{bad}`:\n{s}");
+            }
+        }
+    }
+    // `y` on the Session pane copies the selected file row from the view
+    // model (full path, tab-separated) through tmux's clipboard.
+    t.keys(&["1", "g", "y"]);
+    t.wait_for("copied", 10.0);
+    t.wait("the tmux buffer", 10.0, |_| {
+        String::from_utf8_lossy(&t.cmd(&["show-buffer"]).stdout).contains("run-1200-blocks.mcap")
+    });
+    let copied = String::from_utf8_lossy(&t.cmd(&["show-buffer"]).stdout).into_owned();
+    assert!(
+        copied.starts_with("file\tkind\tstatus\tdetail\tmessage\n"),
+        "{copied:?}"
+    );
+    // Quit is remapped to `x`: `q` does nothing, `x` quits.
+    t.keys(&["q"]);
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(t.pane_state().starts_with('0'), "q must no longer quit");
+    t.keys(&["x"]);
+    t.wait("exit on x", 10.0, |_| t.pane_state().starts_with('1'));
 }

@@ -55,12 +55,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .spawn(move || crate::live::sim::run(&opts, &stop))?
     };
     let paths = vec![log, img];
+    // The technician's config file: its [follow] and [alarms] apply to the
+    // demo's line too, its keys and colours to the TUI.
+    let config = crate::tui::config::load(None);
     let inputs = super::watch::inputs(
         &paths,
         &[],
         None,
         0,
-        None,
+        config.config.follow_settings(),
         None,
         &super::common::LogReadArgs {
             channels: None,
@@ -72,6 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             crate::panes::Session::new("live demo"),
             crate::tui::Options {
                 follow: Some(inputs),
+                config: Some(config),
                 pane: crate::panes::PaneId::Signals,
                 ..Default::default()
             },

@@ -29,7 +29,7 @@ pub struct Args {
     /// With --follow: vision recipe(s) of the images (default: the simulated line's connector).
     #[arg(long = "recipe")]
     pub recipes: Vec<std::path::PathBuf>,
-    /// With --follow: TOML with [follow] and [alarms] sections.
+    /// Config file: key bindings, colours, mouse capture, [follow] defaults and [alarms] rules (docs/tui.md). Default: $XDG_CONFIG_HOME/pinsight/config.toml, else ~/.config/pinsight/config.toml.
     #[arg(long, value_name = "FILE")]
     pub config: Option<std::path::PathBuf>,
 }
@@ -95,6 +95,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "the TUI needs a terminal on stdin and stdout; use `pinsight render PANE` or `pinsight batch SCRIPT` for headless output"
         );
     }
+    // The one config file: keys, colours and mouse for the TUI, [follow]
+    // and [alarms] for following (its problems are findings on the Session
+    // pane, never a refusal to start).
+    let config = crate::tui::config::load(args.config.as_deref());
     let follow = if args.follow.is_empty() {
         None
     } else {
@@ -103,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             &args.recipes,
             None,
             0,
-            args.config.as_ref(),
+            config.config.follow_settings(),
             args.poll.as_deref(),
             &super::common::LogReadArgs {
                 channels: None,
@@ -122,6 +126,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             images,
             theme: None,
             pane,
+            config: Some(config),
             follow,
         },
     )?;

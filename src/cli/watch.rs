@@ -56,8 +56,13 @@ pub struct Args {
 }
 
 /// Reads the follow defaults and alarm rules of a config file.
+/// `path` (`--config FILE`), else the technician's config file
+/// ([`crate::tui::config::default_path`]) when it exists; its other
+/// sections (keys, theme, mouse) are the TUI's and ignored here. Headless,
+/// a bad `[follow]` or `[alarms]` is an error naming the file.
 pub fn read_config(path: Option<&PathBuf>) -> anyhow::Result<(FollowConfig, AlarmRules)> {
-    let Some(p) = path else {
+    let default = crate::tui::config::default_path().filter(|p| p.is_file());
+    let Some(p) = path.or(default.as_ref()) else {
         return Ok((FollowConfig::default(), AlarmRules::default()));
     };
     let text = crate::input::read_text(p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
@@ -85,11 +90,10 @@ pub fn inputs(
     recipes: &[PathBuf],
     process: Option<&PathBuf>,
     learn: usize,
-    config: Option<&PathBuf>,
+    (mut cfg, alarms): (FollowConfig, AlarmRules),
     poll: Option<&str>,
     log: &super::common::LogReadArgs,
 ) -> anyhow::Result<FollowInputs> {
-    let (mut cfg, alarms) = read_config(config)?;
     if let Some(p) = poll {
         cfg.poll_s = parse_duration(p)
             .map_err(|e| anyhow!("--poll: {e}"))?
@@ -176,7 +180,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &args.recipes,
         args.process.as_ref(),
         args.learn,
-        args.config.as_ref(),
+        read_config(args.config.as_ref())?,
         args.poll.as_deref(),
         &args.log,
     )?;

@@ -243,8 +243,8 @@ fn cycle_chart(
         });
     }
     let x_label = match axis {
-        Axis::Stroke => "stroke from TDC [mm]",
-        Axis::Angle => "crank angle from TDC [°]",
+        Axis::Stroke => "stroke from TDC (mm)",
+        Axis::Angle => "crank angle from TDC (°)",
     };
     // Zoom on the objects (a quarter of their span on each side); the whole
     // curve when there are none on this axis.
@@ -278,7 +278,7 @@ fn cycle_chart(
     Some(ChartView::new(
         "press curve",
         x_label,
-        "force N",
+        "force (N)",
         series,
         Some(xb),
     ))

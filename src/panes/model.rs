@@ -421,8 +421,8 @@ pub fn view(s: &Session, ui: &PaneState) -> ModelView {
         let pts = decimate_minmax(&revs, &dev, 0.0, end, ui.chart_columns(0.45));
         Some(ChartView::new(
             "stroke − ideal stroke",
-            "revolution",
-            "mm",
+            "revolutions (rev)",
+            "Δs (mm)",
             vec![SeriesView {
                 name: "Δs".into(),
                 color: 0,

@@ -369,7 +369,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
     v.stroke = Some(ChartView::new(
         format!("stroke — {}", v.showing),
         "crank angle from TDC (°)",
-        "mm",
+        "stroke (mm)",
         stroke,
         Some([0.0, 360.0]),
     ));
@@ -377,7 +377,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
         v.force = Some(ChartView::new(
             format!("load-cell force — {}", v.showing),
             "crank angle from TDC (°)",
-            "N",
+            "load-cell force (N)",
             force,
             Some([0.0, 360.0]),
         ));
@@ -391,7 +391,7 @@ fn measured_view(s: &Session, ui: &PaneState) -> OverlayView {
             v.showing
         ),
         "crank angle from TDC (°)",
-        "mm",
+        "stroke residual (mm)",
         vec![
             line("+2σ noise", &band, 8, SeriesKind::Reference),
             line("−2σ noise", &neg, 8, SeriesKind::Reference),
@@ -466,7 +466,7 @@ fn prediction_view(s: &Session, ui: &PaneState) -> OverlayView {
             v.stroke = Some(ChartView::new(
                 "stroke — last reported revolution",
                 "crank angle θ2 (°)",
-                "mm",
+                "stroke (mm)",
                 vec![
                     series("predicted", &c.stroke_mm, 1, SeriesKind::Line),
                     series("ideal", &c.ideal_stroke_mm, 8, SeriesKind::Reference),
@@ -477,7 +477,7 @@ fn prediction_view(s: &Session, ui: &PaneState) -> OverlayView {
                 v.force = Some(ChartView::new(
                     "load-cell force — last reported revolution",
                     "crank angle θ2 (°)",
-                    "N",
+                    "load-cell force (N)",
                     vec![series("predicted", &c.process_force_n, 1, SeriesKind::Line)],
                     Some([0.0, 360.0]),
                 ));

@@ -296,7 +296,7 @@ pub fn view(s: &Session, ui: &PaneState) -> SignalsView {
         let mut chart = ChartView::new(
             c.name.clone(),
             "time (s)",
-            c.unit.clone(),
+            axis_title(&c.name, &c.unit),
             vec![SeriesView {
                 name: c.name.clone(),
                 color: i,
@@ -339,6 +339,17 @@ pub fn view(s: &Session, ui: &PaneState) -> SignalsView {
         points_drawn,
         message,
     }
+}
+
+/// The y axis title of a channel: its name and unit (`angle (rad)`; `(–)`
+/// for a channel without a unit).
+fn axis_title(name: &str, unit: &str) -> String {
+    let unit = if unit.trim().is_empty() {
+        "–"
+    } else {
+        unit.trim()
+    };
+    format!("{name} ({unit})")
 }
 
 #[cfg(test)]

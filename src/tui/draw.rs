@@ -7,7 +7,7 @@ pub use super::image_cache::{ImageCache, ImageMode, QUERY_TIMEOUT_MS};
 use super::keys::KEYS;
 use super::panes::draw_pane;
 use super::theme::Theme;
-use super::widgets::{block, trunc};
+use super::widgets::{block, block_in, trunc};
 use crate::panes::{PaneId, PaneView};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout, Rect};
@@ -69,47 +69,115 @@ impl Chrome {
 }
 
 /// Tab labels fitting `width`, with their column ranges (for mouse clicks).
+/// Full names when they fit; else the abbreviations of
+/// [`super::fit::ABBREVIATIONS`] (Sess, Sig, Ovl: ten tabs in 77 columns);
+/// else only the keys, the current pane named.
 pub fn tabs(width: u16) -> Vec<(PaneId, String, u16, u16)> {
-    // "9 Methods ": the title, its number and two spaces (nine panes fit
-    // 80 columns in full).
-    let full: u16 = PaneId::ALL.iter().map(|p| p.title().len() as u16 + 3).sum();
-    let short = full > width;
-    let mut x = 0u16;
-    let mut out = Vec::new();
-    for (i, p) in PaneId::ALL.iter().enumerate() {
-        let name = if short {
-            p.title().chars().take(3).collect::<String>()
-        } else {
-            p.title().to_string()
-        };
-        // Panes 1–9 by their digit, the tenth (Trend) by T.
-        let key = if i < 9 {
+    tabs_for(width, None)
+}
+
+fn tabs_for(width: u16, current: Option<PaneId>) -> Vec<(PaneId, String, u16, u16)> {
+    // Panes 1–9 by their digit, the tenth (Trend) by T.
+    let key = |i: usize| {
+        if i < 9 {
             (i + 1).to_string()
         } else {
             "T".into()
-        };
-        let label = format!("{key} {name} ");
-        let w = label.chars().count() as u16;
-        out.push((*p, label, x, x + w));
-        x += w;
+        }
+    };
+    let build = |name: &dyn Fn(PaneId) -> String| {
+        let mut x = 0u16;
+        let mut out = Vec::new();
+        for (i, p) in PaneId::ALL.iter().enumerate() {
+            let n = name(*p);
+            let label = if n.is_empty() {
+                format!("{} ", key(i))
+            } else {
+                format!("{} {n} ", key(i))
+            };
+            let w = super::fit::width(&label) as u16;
+            out.push((*p, label, x, x + w));
+            x += w;
+        }
+        (out, x)
+    };
+    let (full, w) = build(&|p| p.title().to_string());
+    if w <= width {
+        return full;
     }
-    out
+    let (short, w) = build(&|p| super::fit::abbreviate(p.title()));
+    if w <= width {
+        return short;
+    }
+    build(&|p| {
+        if Some(p) == current {
+            p.title().to_string()
+        } else {
+            String::new()
+        }
+    })
+    .0
 }
 
-/// Key hints per pane.
-fn hints(pane: PaneId) -> &'static str {
+/// Key hints per pane (key, what), most useful first; the status line
+/// shows as many whole hints as fit.
+fn hints(pane: PaneId) -> &'static [(&'static str, &'static str)] {
     match pane {
-        PaneId::Session => "j/k select  o open",
-        PaneId::Signals => "h/l cursor  H/L pan  +/- zoom  [ ] cycle  space channel  0 all",
-        PaneId::Overlay => "n/p cycle  a envelope",
-        PaneId::Model => "j/k select  Enter edit  r re-run",
-        PaneId::Study => "r run  f factor  h/l quantity",
-        PaneId::Vision => "n/p image  j/k pin",
-        PaneId::Yield => "j/k select",
-        PaneId::Methods => "j/k chart  r re-run",
-        PaneId::Line => "j/k cycle  r re-run",
-        PaneId::Trend => "j/k head  r re-run",
+        PaneId::Session => &[("j/k", "select"), ("o", "open"), ("y", "copy")],
+        PaneId::Signals => &[
+            ("h/l", "cursor"),
+            ("H/L", "pan"),
+            ("+/-", "zoom"),
+            ("[ ]", "cycle"),
+            ("space", "channel"),
+            ("0", "all"),
+            ("y", "copy"),
+        ],
+        PaneId::Overlay => &[
+            ("n/p", "cycle"),
+            ("a", "envelope"),
+            ("C", "calibrate"),
+            ("y", "copy"),
+        ],
+        PaneId::Model => &[
+            ("j/k", "select"),
+            ("Enter", "edit"),
+            ("r", "re-run"),
+            ("y", "copy"),
+        ],
+        PaneId::Study => &[
+            ("r", "run"),
+            ("f", "factor"),
+            ("h/l", "quantity"),
+            ("y", "copy"),
+        ],
+        PaneId::Vision => &[("n/p", "image"), ("j/k", "pin"), ("y", "copy")],
+        PaneId::Yield => &[("j/k", "select"), ("r", "re-run"), ("y", "copy")],
+        PaneId::Methods => &[("j/k", "chart"), ("r", "re-run"), ("y", "copy")],
+        PaneId::Line => &[("j/k", "cycle"), ("r", "re-run"), ("y", "copy")],
+        PaneId::Trend => &[("j/k", "head"), ("r", "re-run"), ("y", "copy")],
     }
+}
+
+/// The status line's hints: help, quit, pane, then the pane's hints that
+/// fit in `width` (whole hints only).
+fn hint_line<'a>(pane: PaneId, width: usize, theme: &Theme) -> Line<'a> {
+    let mut spans = Vec::new();
+    let mut used = 0usize;
+    let all = [("?", "help"), ("q", "quit"), ("Tab", "pane")];
+    for (i, (k, what)) in all.iter().chain(hints(pane)).enumerate() {
+        let w = k.chars().count() + 1 + what.chars().count() + 2;
+        if used + w - 2 > width {
+            if i < all.len() {
+                continue;
+            }
+            break;
+        }
+        spans.push(Span::styled(k.to_string(), theme.key()));
+        spans.push(Span::styled(format!(" {what}  "), theme.muted()));
+        used += w;
+    }
+    Line::from(spans)
 }
 
 /// Draws the whole screen.
@@ -134,7 +202,7 @@ pub fn draw_screen(
     .areas(area);
     // Tab bar.
     let mut spans = Vec::new();
-    for (p, label, _, _) in tabs(area.width) {
+    for (p, label, _, _) in tabs_for(area.width, Some(chrome.pane)) {
         let style = if p == chrome.pane {
             theme.selected()
         } else {
@@ -165,7 +233,7 @@ pub fn draw_screen(
                 &format!("{mark}{} ", li.text),
                 (area.width as usize * 2 / 3).max(10),
             );
-            let w = (text.chars().count() as u16).min(bottom.width);
+            let w = (super::fit::width(&text) as u16).min(bottom.width);
             let [ind, rest] =
                 Layout::horizontal([Constraint::Length(w), Constraint::Min(0)]).areas(bottom);
             let style = if li.alarm {
@@ -181,22 +249,14 @@ pub fn draw_screen(
     };
     match &chrome.status {
         Status::Hints => {
-            let h = hints(chrome.pane);
-            let line = Line::from(vec![
-                Span::styled("?", theme.key()),
-                Span::styled(" help  ", theme.muted()),
-                Span::styled("q", theme.key()),
-                Span::styled(" quit  ", theme.muted()),
-                Span::styled("Tab", theme.key()),
-                Span::styled(" pane  ", theme.muted()),
-                Span::styled(h, theme.muted()),
-            ]);
+            // Whole hints in the room the live indicator leaves.
+            let line = hint_line(chrome.pane, bottom.width as usize, theme);
             f.render_widget(Paragraph::new(line), bottom);
         }
         Status::Message { text, error } => {
             let style = if *error { theme.error() } else { theme.ok() };
             f.render_widget(
-                Paragraph::new(Line::styled(trunc(text, area.width as usize), style)),
+                Paragraph::new(Line::styled(trunc(text, bottom.width as usize), style)),
                 bottom,
             );
         }
@@ -274,9 +334,26 @@ pub fn help_rows() -> usize {
 fn help(f: &mut Frame, body: Rect, scroll: usize, theme: &Theme) {
     let r = centered(body, body.width.saturating_sub(2).min(110), body.height);
     f.render_widget(Clear, r);
+    let inner_w = r.width.saturating_sub(2);
+    let (ctx_w, keys_w) = (11u16, 15u16);
+    let what_w = inner_w.saturating_sub(ctx_w + keys_w + 2).max(10) as usize;
+    // Each row wraps its text at word boundaries: nothing is cut.
+    let heights: Vec<usize> = KEYS
+        .iter()
+        .map(|(_, _, what)| super::fit::wrap(what, what_w).len().max(1))
+        .collect();
     let visible = r.height.saturating_sub(3) as usize;
-    let scroll = scroll.min(KEYS.len().saturating_sub(visible));
+    // The last scroll position that still fills the screen.
+    let mut last_start = KEYS.len();
+    let mut h = 0;
+    while last_start > 0 && h + heights[last_start - 1] <= visible {
+        last_start -= 1;
+        h += heights[last_start];
+    }
+    let scroll = scroll.min(last_start);
     let mut last = "";
+    let mut shown_h = 0usize;
+    let mut shown = 0usize;
     let rows: Vec<Row> = KEYS
         .iter()
         .enumerate()
@@ -289,15 +366,27 @@ fn help(f: &mut Frame, body: Rect, scroll: usize, theme: &Theme) {
                 ""
             };
             last = ctx;
+            let lines: Vec<Line> = super::fit::wrap(what, what_w)
+                .into_iter()
+                .map(Line::raw)
+                .collect();
             Row::new(vec![
-                Span::styled(c.to_string(), theme.header()),
-                Span::styled(keys.to_string(), theme.key()),
-                Span::raw(what.to_string()),
+                ratatui::widgets::Cell::from(Span::styled(c.to_string(), theme.header())),
+                ratatui::widgets::Cell::from(Span::styled(keys.to_string(), theme.key())),
+                ratatui::widgets::Cell::from(ratatui::text::Text::from(lines)),
             ])
+            .height(heights[i] as u16)
         })
         .skip(scroll)
         .collect();
-    let more = if scroll + visible < KEYS.len() {
+    for h in &heights[scroll..] {
+        if shown_h + h > visible {
+            break;
+        }
+        shown_h += h;
+        shown += 1;
+    }
+    let more = if scroll + shown < KEYS.len() {
         " — j/k scroll"
     } else {
         ""
@@ -305,14 +394,18 @@ fn help(f: &mut Frame, body: Rect, scroll: usize, theme: &Theme) {
     let t = Table::new(
         rows,
         [
-            Constraint::Length(11),
-            Constraint::Length(15),
+            Constraint::Length(ctx_w),
+            Constraint::Length(keys_w),
             Constraint::Min(10),
         ],
     )
     .block(
-        block(format!("Help — every key (? or Esc closes){more}"), theme)
-            .border_style(theme.border_focus()),
+        block_in(
+            r,
+            &format!("Help — every key (? or Esc closes){more}"),
+            theme,
+        )
+        .border_style(theme.border_focus()),
     );
     f.render_widget(t, r);
 }

@@ -30,8 +30,13 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ("everywhere", "g G  Home End", "first / last row"),
     (
         "everywhere",
+        "y",
+        "copy the selected row or figure (OSC 52; tmux: set-clipboard on)",
+    ),
+    (
+        "everywhere",
         "mouse",
-        "click a tab; wheel scrolls (zooms on Signals)",
+        "with mouse = true in the config: click a tab; wheel scrolls (zooms on Signals)",
     ),
     (
         "live",

@@ -6,15 +6,25 @@
 //! - [`draw`]: the screen (tabs, status line, help, prompt) and the image cache.
 //! - [`panes`]: drawing of each pane's view.
 //! - [`theme`]: colours (16-colour safe, `NO_COLOR`).
+//! - [`fit`]: labels fitted to their cells without cutting words (the
+//!   abbreviation table).
 //! - [`keys`]: every key, for the help overlay and the docs.
+//! - [`config`]: the technician's config file (key bindings, colours,
+//!   mouse capture; follow and alarm sections passed through).
+//! - [`input`]: keys between the terminal and the app (bindings, `y` copy).
+//! - [`clipboard`]: what `y` copies, as OSC 52.
 //!
 //! The loop redraws only when something changed (a key, a resize, a job's
 //! progress or result), and ratatui sends only the cells that differ from
 //! the previous frame, so a slow SSH link carries little.
 
 pub mod app;
+pub mod clipboard;
+pub mod config;
 pub mod draw;
+pub mod fit;
 pub mod image_cache;
+pub mod input;
 pub mod jobs;
 pub mod keys;
 pub mod panes;
@@ -25,6 +35,7 @@ pub mod worker;
 use crate::panes::Session;
 use app::{App, Msg};
 use draw::{ImageCache, draw_screen};
+use input::Input;
 use ratatui::Terminal;
 use ratatui::backend::{Backend, TestBackend};
 use ratatui::buffer::Buffer;
@@ -42,7 +53,11 @@ pub struct Options {
     pub theme: Option<Theme>,
     /// Start on this pane.
     pub pane: crate::panes::PaneId,
-    /// Follow a live line (`tui --follow`, `demo --live`).
+    /// The config file as loaded (`--config FILE`); None: read the
+    /// default path ([`config::default_path`]) at start.
+    pub config: Option<config::Loaded>,
+    /// Follow a live line (`tui --follow`, `demo --live`); its follow
+    /// defaults and alarm rules come from the same config file.
     pub follow: Option<crate::live::FollowInputs>,
 }
 
@@ -52,6 +67,7 @@ impl Default for Options {
             images: draw::ImageMode::Auto,
             theme: None,
             pane: crate::panes::PaneId::Session,
+            config: None,
             follow: None,
         }
     }
@@ -183,7 +199,9 @@ pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
     // NO_COLOR is applied by the theme; crossterm's own handling would emit
     // empty colour codes that reset bold and reverse video (pitfalls.md).
     crossterm::style::force_color_output(true);
-    let theme = opts.theme.unwrap_or_else(Theme::detect);
+    // A bad config never stops the TUI: its findings are shown once it runs.
+    let cfg = opts.config.clone().unwrap_or_else(|| config::load(None));
+    let theme = opts.theme.unwrap_or_else(|| cfg.config.theme());
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let mut live_rx = None;
     let mut rules = crate::live::AlarmRules::default();
@@ -202,14 +220,28 @@ pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
     install_panic_hook();
     let mut terminal = ratatui::try_init()?;
     let result = (|| -> anyhow::Result<()> {
-        crossterm::execute!(
-            std::io::stdout(),
-            crossterm::event::EnableBracketedPaste,
-            crossterm::event::EnableMouseCapture
-        )?;
+        crossterm::execute!(std::io::stdout(), crossterm::event::EnableBracketedPaste)?;
+        // Mouse capture is off unless the config asks: a terminal that
+        // reports the mouse does not select text with it (over SSH the way
+        // to copy), and `y` copies the selection anyway.
+        if cfg.config.mouse {
+            crossterm::execute!(std::io::stdout(), crossterm::event::EnableMouseCapture)?;
+        }
         let size = terminal.size()?;
         let mut app = App::new(session, size.width, size.height);
         app.pane = opts.pane;
+        if let Some(entry) = cfg.file_entry() {
+            app.session.files.push(entry);
+        }
+        if let Some(first) = cfg.findings.first() {
+            let more = match cfg.findings.len() {
+                1 => String::new(),
+                n => format!(" (+{} more on the Session pane)", n - 1),
+            };
+            app.message = Some((format!("config: {first}{more}"), true));
+        }
+        let input = Input::new(cfg.config.keys.clone());
+        let mouse = if cfg.config.mouse { "on" } else { "off" };
         // Background work starts before the first frame.
         let worker = Worker::default();
         for (id, req, progress) in app.take_requests() {
@@ -243,15 +275,18 @@ pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
             draw::ImageMode::Halfblocks => ImageCache::halfblocks(),
             draw::ImageMode::Off => ImageCache::off(),
         };
-        app.session.display = Some(format!("{colours}; images: {}", img.protocol_name()));
+        app.session.display = Some(format!(
+            "{colours}; images: {}; mouse {mouse}",
+            img.protocol_name()
+        ));
         event_loop(
             &mut terminal,
             &mut app,
             &worker,
             &theme,
             &mut img,
-            live_rx.as_ref(),
-            &rules,
+            &input,
+            live_rx.as_ref().map(|rx| (rx, &rules)),
         )
     })();
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
@@ -265,8 +300,12 @@ fn event_loop<B: Backend>(
     worker: &Worker,
     theme: &Theme,
     img: &mut ImageCache,
-    live: Option<&std::sync::mpsc::Receiver<crate::live::LiveBatch>>,
-    rules: &crate::live::AlarmRules,
+    input: &Input,
+    // The follower's batches and the alarm rules announcing them.
+    live: Option<(
+        &std::sync::mpsc::Receiver<crate::live::LiveBatch>,
+        &crate::live::AlarmRules,
+    )>,
 ) -> anyhow::Result<()>
 where
     B::Error: Send + Sync + 'static,
@@ -302,7 +341,11 @@ where
             // Drain every pending event before drawing again.
             loop {
                 let msg = match event::read()? {
-                    Event::Key(k) => Some(Msg::Key(k)),
+                    Event::Key(k) => {
+                        // A copy answered by the input layer changes the status line.
+                        dirty = true;
+                        input.key(app, k, &mut std::io::stdout())
+                    }
                     Event::Mouse(m) => Some(Msg::Mouse(m)),
                     Event::Paste(s) => Some(Msg::Paste(s)),
                     Event::Resize(w, h) => Some(Msg::Resize(w, h)),
@@ -321,7 +364,7 @@ where
             app.update(Msg::JobDone(id, Box::new(out)));
             dirty = true;
         }
-        if let Some(rx) = live {
+        if let Some((rx, rules)) = live {
             for b in rx.try_iter() {
                 app.update(Msg::Live(Box::new(b)));
                 dirty = true;

@@ -8,6 +8,11 @@
 //! (pitfalls.md). The TUI therefore forces crossterm's colour output on and
 //! applies `NO_COLOR` here: with the plain theme every colour is
 //! `Color::Reset`, whose codes (39/49) reset nothing else.
+//!
+//! The colours of the roles come from a [`Palette`]: the built-in `dark`
+//! (default) or `light` preset, with any role overridden by the user's
+//! config file (`[theme]`, [`super::config`]). Colours the terminal cannot
+//! show are reduced to its depth (256 or 16 colours).
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
@@ -47,36 +52,129 @@ impl ColorDepth {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Theme {
     pub depth: ColorDepth,
+    pub palette: Palette,
 }
 
-/// Series colours: distinct on dark and light backgrounds, all in the 16-colour set.
-const SERIES: [Color; 8] = [
-    Color::Cyan,
-    Color::Yellow,
-    Color::Green,
-    Color::Magenta,
-    Color::LightRed,
-    Color::LightBlue,
-    Color::White,
-    Color::LightGreen,
+/// The colour of every role (what `[theme]` in the config file sets).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Palette {
+    pub title: Color,
+    pub header: Color,
+    pub ok: Color,
+    pub warn: Color,
+    pub error: Color,
+    pub muted: Color,
+    pub key: Color,
+    pub border: Color,
+    pub focus: Color,
+    pub cursor: Color,
+    /// Series colours by palette slot (slot 8, reference curves, is muted).
+    pub series: [Color; 8],
+}
+
+/// The role names a config file may set, in the order of [`Palette::role_mut`].
+pub const ROLES: &[&str] = &[
+    "title", "header", "ok", "warn", "error", "muted", "key", "border", "focus", "cursor",
 ];
+
+impl Palette {
+    /// For dark backgrounds (the default): distinct, all in the 16-colour set.
+    pub const DARK: Palette = Palette {
+        title: Color::Cyan,
+        header: Color::Yellow,
+        ok: Color::Green,
+        warn: Color::Yellow,
+        error: Color::LightRed,
+        muted: Color::DarkGray,
+        key: Color::LightCyan,
+        border: Color::DarkGray,
+        focus: Color::Cyan,
+        cursor: Color::LightYellow,
+        series: [
+            Color::Cyan,
+            Color::Yellow,
+            Color::Green,
+            Color::Magenta,
+            Color::LightRed,
+            Color::LightBlue,
+            Color::White,
+            Color::LightGreen,
+        ],
+    };
+    /// For light backgrounds: no white or light yellow, darker hues.
+    pub const LIGHT: Palette = Palette {
+        title: Color::Blue,
+        header: Color::Magenta,
+        ok: Color::Green,
+        warn: Color::Magenta,
+        error: Color::Red,
+        muted: Color::DarkGray,
+        key: Color::Blue,
+        border: Color::DarkGray,
+        focus: Color::Blue,
+        cursor: Color::Red,
+        series: [
+            Color::Blue,
+            Color::Red,
+            Color::Green,
+            Color::Magenta,
+            Color::Cyan,
+            Color::Black,
+            Color::DarkGray,
+            Color::Yellow,
+        ],
+    };
+
+    /// A preset by name (`dark`, `light`).
+    pub fn preset(name: &str) -> Option<Palette> {
+        match name {
+            "dark" => Some(Self::DARK),
+            "light" => Some(Self::LIGHT),
+            _ => None,
+        }
+    }
+
+    /// The colour of a role named in [`ROLES`].
+    pub fn role_mut(&mut self, name: &str) -> Option<&mut Color> {
+        Some(match name {
+            "title" => &mut self.title,
+            "header" => &mut self.header,
+            "ok" => &mut self.ok,
+            "warn" => &mut self.warn,
+            "error" => &mut self.error,
+            "muted" => &mut self.muted,
+            "key" => &mut self.key,
+            "border" => &mut self.border,
+            "focus" => &mut self.focus,
+            "cursor" => &mut self.cursor,
+            _ => return None,
+        })
+    }
+}
+
+impl Default for Palette {
+    fn default() -> Self {
+        Self::DARK
+    }
+}
 
 impl Theme {
     pub fn detect() -> Self {
-        Self {
-            depth: ColorDepth::detect(),
-        }
+        Self::with_depth(ColorDepth::detect())
     }
     /// 16 colours (tests, `render`).
     pub fn ansi16() -> Self {
-        Self {
-            depth: ColorDepth::Ansi16,
-        }
+        Self::with_depth(ColorDepth::Ansi16)
     }
     /// `NO_COLOR`.
     pub fn plain() -> Self {
+        Self::with_depth(ColorDepth::None)
+    }
+    /// The default palette at a colour depth.
+    pub fn with_depth(depth: ColorDepth) -> Self {
         Self {
-            depth: ColorDepth::None,
+            depth,
+            palette: Palette::DARK,
         }
     }
 
@@ -84,35 +182,42 @@ impl Theme {
         self.depth != ColorDepth::None
     }
 
-    fn fg(&self, c: Color) -> Style {
-        if self.colored() {
-            Style::new().fg(c)
-        } else {
-            Style::new().fg(Color::Reset)
+    /// A colour as the terminal can show it (config colours may be RGB or
+    /// 256-colour indexes).
+    fn shown(&self, c: Color) -> Color {
+        match self.depth {
+            ColorDepth::None => Color::Reset,
+            ColorDepth::TrueColor => c,
+            ColorDepth::Ansi256 => to_256(c),
+            ColorDepth::Ansi16 => to_16(index_to_rgb(c)),
         }
+    }
+
+    fn fg(&self, c: Color) -> Style {
+        Style::new().fg(self.shown(c))
     }
 
     pub fn base(&self) -> Style {
         Style::new().fg(Color::Reset).bg(Color::Reset)
     }
     pub fn title(&self) -> Style {
-        self.fg(Color::Cyan).add_modifier(Modifier::BOLD)
+        self.fg(self.palette.title).add_modifier(Modifier::BOLD)
     }
     pub fn header(&self) -> Style {
-        self.fg(Color::Yellow).add_modifier(Modifier::BOLD)
+        self.fg(self.palette.header).add_modifier(Modifier::BOLD)
     }
     /// The selected row / active tab: reverse video works with and without colour.
     pub fn selected(&self) -> Style {
         Style::new().add_modifier(Modifier::REVERSED | Modifier::BOLD)
     }
     pub fn ok(&self) -> Style {
-        self.fg(Color::Green)
+        self.fg(self.palette.ok)
     }
     pub fn warn(&self) -> Style {
-        self.fg(Color::Yellow).add_modifier(Modifier::BOLD)
+        self.fg(self.palette.warn).add_modifier(Modifier::BOLD)
     }
     pub fn error(&self) -> Style {
-        let s = self.fg(Color::LightRed).add_modifier(Modifier::BOLD);
+        let s = self.fg(self.palette.error).add_modifier(Modifier::BOLD);
         if self.colored() {
             s
         } else {
@@ -121,29 +226,31 @@ impl Theme {
     }
     pub fn muted(&self) -> Style {
         if self.colored() {
-            Style::new().fg(Color::DarkGray)
+            self.fg(self.palette.muted)
         } else {
             Style::new().fg(Color::Reset).add_modifier(Modifier::DIM)
         }
     }
     pub fn key(&self) -> Style {
-        self.fg(Color::LightCyan).add_modifier(Modifier::BOLD)
+        self.fg(self.palette.key).add_modifier(Modifier::BOLD)
     }
     pub fn border(&self) -> Style {
-        self.fg(Color::DarkGray)
+        self.fg(self.palette.border)
     }
     pub fn border_focus(&self) -> Style {
-        self.fg(Color::Cyan)
+        self.fg(self.palette.focus)
     }
     pub fn cursor(&self) -> Style {
-        self.fg(Color::LightYellow)
+        self.fg(self.palette.cursor)
     }
     pub fn marker(&self) -> Style {
         self.muted()
     }
     pub fn gauge(&self) -> Style {
         if self.colored() {
-            Style::new().fg(Color::Cyan).bg(Color::Black)
+            Style::new()
+                .fg(self.shown(self.palette.focus))
+                .bg(Color::Black)
         } else {
             Style::new().add_modifier(Modifier::REVERSED)
         }
@@ -155,7 +262,7 @@ impl Theme {
             // Slot 8: reference curves (ideal mechanism).
             return self.muted();
         }
-        self.fg(SERIES[i % SERIES.len()])
+        self.fg(self.palette.series[i % self.palette.series.len()])
     }
 
     /// The marker of series `i`: braille in colour; without colour,
@@ -231,6 +338,41 @@ pub fn to_256(c: Color) -> Color {
     }
 }
 
+/// An xterm-256 index as RGB (so it can be reduced to 16 colours); other
+/// colours unchanged.
+pub fn index_to_rgb(c: Color) -> Color {
+    let Color::Indexed(i) = c else { return c };
+    match i {
+        0..=15 => [
+            Color::Black,
+            Color::Red,
+            Color::Green,
+            Color::Yellow,
+            Color::Blue,
+            Color::Magenta,
+            Color::Cyan,
+            Color::Gray,
+            Color::DarkGray,
+            Color::LightRed,
+            Color::LightGreen,
+            Color::LightYellow,
+            Color::LightBlue,
+            Color::LightMagenta,
+            Color::LightCyan,
+            Color::White,
+        ][i as usize],
+        16..=231 => {
+            let k = i - 16;
+            let lvl = |v: u8| if v == 0 { 0 } else { 55 + 40 * v };
+            Color::Rgb(lvl(k / 36), lvl(k / 6 % 6), lvl(k % 6))
+        }
+        _ => {
+            let v = 8 + 10 * (i - 232);
+            Color::Rgb(v, v, v)
+        }
+    }
+}
+
 /// Nearest of the 16 ANSI colours (by their usual xterm values).
 pub fn to_16(c: Color) -> Color {
     let Color::Rgb(r, g, b) = c else { return c };
@@ -276,6 +418,22 @@ mod tests {
         assert_ne!(t.series_marker(0), t.series_marker(1));
         let c = Theme::ansi16();
         assert_eq!(c.ok().fg, Some(Color::Green));
+    }
+
+    #[test]
+    fn palette_colours_are_reduced_to_the_depth() {
+        let mut t = Theme::ansi16();
+        t.palette.title = Color::Rgb(250, 10, 10);
+        t.palette.ok = Color::Indexed(46);
+        assert_eq!(t.title().fg, Some(Color::LightRed));
+        assert_eq!(t.ok().fg, Some(Color::LightGreen));
+        t.depth = ColorDepth::Ansi256;
+        assert_eq!(t.title().fg, Some(Color::Indexed(196)));
+        assert_eq!(t.ok().fg, Some(Color::Indexed(46)));
+        t.depth = ColorDepth::None;
+        assert_eq!(t.title().fg, Some(Color::Reset));
+        assert_eq!(index_to_rgb(Color::Indexed(9)), Color::LightRed);
+        assert_eq!(index_to_rgb(Color::Indexed(244)), Color::Rgb(128, 128, 128));
     }
 
     #[test]

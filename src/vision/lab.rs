@@ -414,7 +414,7 @@ pub fn lab_panels(lab: &VisionLab) -> Vec<Panel> {
         panels.push(Panel::Line(LineChart {
             title: format!("Pipeline against {factor}"),
             x_label: unit.into(),
-            y_label: "fraction right".into(),
+            y_label: "fraction right (–)".into(),
             series,
             y_range: Some((0.0, 1.05)),
             ..Default::default()

@@ -324,7 +324,11 @@ pub fn head_chart(h: &HeadTrend, level: f64) -> LineChart {
             .collect();
     let mut chart = LineChart {
         title: format!("head {}: clearance ± U95", h.rig),
-        x_label: unit.to_string(),
+        x_label: match unit {
+            "cycles" => "cumulative cycles (count)".to_string(),
+            "days" => "time (days)".to_string(),
+            u => format!("{u} (no.)"),
+        },
         y_label: "clearance (mm)".into(),
         ..LineChart::default()
     };

@@ -50,7 +50,7 @@ impl DynamicsLab {
                 }
                 Panel::Line(LineChart {
                     title: format!("work–precision: {sc}"),
-                    x_label: "evaluations (rhs + aux)".into(),
+                    x_label: "rhs + aux evaluations (count)".into(),
                     y_label: "max stroke error (mm)".into(),
                     series,
                     log_x: true,
@@ -120,8 +120,8 @@ impl DynamicsLab {
             .collect();
         let mut panels = vec![Panel::Line(LineChart {
             title: "prediction horizon against tolerance".into(),
-            x_label: "rtol".into(),
-            y_label: "revolutions until c/10 apart".into(),
+            x_label: "rtol (–)".into(),
+            y_label: "revolutions until c/10 apart (rev)".into(),
             series: vec![
                 Series::line("realisations 1 nm apart", horizon)
                     .with_style(SeriesStyle::LinePoints),
@@ -154,7 +154,7 @@ impl DynamicsLab {
                 "ensemble mean |Δs| against tolerance ({} realisations, ±1 std)",
                 self.long_run.realisations
             ),
-            x_label: "rtol".into(),
+            x_label: "rtol (–)".into(),
             y_label: "mean |Δs| (mm)".into(),
             categories: cats,
             series: vec![("mean |Δs|".into(), mean)],
@@ -183,7 +183,7 @@ impl DynamicsLab {
         vec![Panel::Bar(BarChart {
             title: "where the steps go (rtol 1e-8, deterministic window)".into(),
             x_label: "method, scene".into(),
-            y_label: "steps".into(),
+            y_label: "steps (count)".into(),
             categories: cats,
             series: vec![
                 (

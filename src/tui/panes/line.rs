@@ -44,32 +44,51 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
             theme,
         ),
     }
-    let rows: Vec<Row> = v
+    let header = ["characteristic", "n", "Cpk", "band", "WE"];
+    let cells: Vec<Vec<String>> = v
         .spc
         .iter()
         .chain(&v.pin_spc)
         .map(|s| {
+            vec![
+                s.name.clone(),
+                s.n.to_string(),
+                opt(s.cpk),
+                s.band.to_string(),
+                s.alarms.to_string(),
+            ]
+        })
+        .collect();
+    let widths = column_widths(
+        spc_area.width.saturating_sub(2),
+        &[
+            Col::Fill(8),
+            Col::Auto(2, 5),
+            Col::Auto(3, 7),
+            Col::Auto(4, 10),
+            Col::Auto(2, 3),
+        ],
+        &content_widths(&header, &cells),
+    );
+    let rows: Vec<Row> = v
+        .spc
+        .iter()
+        .chain(&v.pin_spc)
+        .zip(&cells)
+        .map(|(s, c)| {
             Row::new(vec![
-                Cell::from(trunc(&s.name, 20)),
-                Cell::from(s.n.to_string()),
-                Cell::from(opt(s.cpk)),
-                Cell::from(s.band).style(band_style(s.band, theme)),
-                Cell::from(s.alarms.to_string()),
+                Cell::from(trunc(&c[0], widths[0] as usize)),
+                Cell::from(c[1].clone()),
+                Cell::from(c[2].clone()),
+                Cell::from(trunc(&c[3], widths[3] as usize)).style(band_style(s.band, theme)),
+                Cell::from(c[4].clone()),
             ])
         })
         .collect();
-    let t = Table::new(
-        rows,
-        [
-            Constraint::Min(8),
-            Constraint::Length(5),
-            Constraint::Length(6),
-            Constraint::Length(10),
-            Constraint::Length(3),
-        ],
-    )
-    .header(Row::new(vec!["characteristic", "n", "Cpk", "band", "WE"]).style(theme.header()))
-    .block(block("SPC (Cpk ≥ 1.33 capable)", theme));
+    // WE: the Western Electric run-rule alarms of the characteristic.
+    let t = Table::new(rows, lengths(&widths))
+        .header(header_row(&header, &widths, theme))
+        .block(block_in(spc_area, "SPC (Cpk ≥ 1.33 capable)", theme));
     f.render_widget(t, spc_area);
 
     let mut lines = vec![kv_line(
@@ -126,6 +145,12 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
     let [info, list] =
         Layout::vertical([Constraint::Length(info_h), Constraint::Min(3)]).areas(side);
     text_block(f, info, "Process monitor", lines, theme);
+    let header = ["cycle", "", "reasons"];
+    let widths = column_widths(
+        list.width.saturating_sub(2),
+        &[Col::Fixed(6), Col::Fixed(4), Col::Fill(4)],
+        &[],
+    );
     let rows: Vec<Row> = v
         .cycles
         .iter()
@@ -138,27 +163,21 @@ pub(super) fn line(f: &mut Frame, area: Rect, v: &LineView, theme: &Theme) {
             Row::new(vec![
                 Cell::from(c.index.to_string()),
                 st,
-                Cell::from(c.reasons.join("; ")),
+                Cell::from(trunc(&c.reasons.join("; "), widths[2] as usize)),
             ])
         })
         .collect();
-    let t = Table::new(
-        rows,
-        [
-            Constraint::Length(6),
-            Constraint::Length(4),
-            Constraint::Min(4),
-        ],
-    )
-    .header(Row::new(vec!["cycle", "", "reasons"]).style(theme.header()))
-    .row_highlight_style(theme.selected())
-    .block(block(
-        format!(
-            "Cycles of {}",
-            trunc_left(v.log.as_deref().unwrap_or("–"), 24)
-        ),
-        theme,
-    ));
+    let title_room = list.width.saturating_sub(12) as usize;
+    let t = Table::new(rows, lengths(&widths))
+        .header(header_row(&header, &widths, theme))
+        .row_highlight_style(theme.selected())
+        .block(block(
+            format!(
+                "Cycles of {}",
+                trunc_left(v.log.as_deref().unwrap_or("–"), title_room)
+            ),
+            theme,
+        ));
     let mut st = TableState::default().with_selected(v.selected);
     f.render_stateful_widget(t, list, &mut st);
 }

@@ -4,8 +4,9 @@
 use super::image_cache::ImageCache;
 use super::theme::Theme;
 use super::widgets::{
-    ChartFrame, bars_lines, block, draw_chart, draw_chart_with, format_value, kv_line, message,
-    text_block, trunc, trunc_left,
+    ChartFrame, Col, bars_lines, block, block_in, column_widths, content_widths, draw_chart,
+    draw_chart_with, format_value, header_row, kv_line, lengths, message, text_block, trunc,
+    trunc_left,
 };
 use crate::panes::PaneView;
 use crate::panes::methods::MethodsView;
@@ -44,6 +45,23 @@ pub(super) fn fmt_s(t: f64) -> String {
 
 pub(super) fn opt(x: Option<f64>) -> String {
     x.map(format_value).unwrap_or_else(|| "–".into())
+}
+
+/// A value with four significant digits (a narrow readout).
+pub(super) fn sig4(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() && v != 0.0 => {
+            let mag = v.abs().log10().floor() as i32;
+            if !(-4..6).contains(&mag) {
+                format!("{v:.3e}")
+            } else {
+                let decimals = (3 - mag).max(0) as usize;
+                format!("{v:.decimals$}")
+            }
+        }
+        Some(0.0) => "0".into(),
+        _ => "–".into(),
+    }
 }
 
 // ---------------------------------------------------------------- Session

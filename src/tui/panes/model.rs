@@ -7,45 +7,69 @@ pub(super) fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
         Layout::horizontal([Constraint::Percentage(58), Constraint::Percentage(42)]).areas(area);
     let [table_area, edit_area] =
         Layout::vertical([Constraint::Min(5), Constraint::Length(4)]).areas(left);
-    let key_w = 22u16.min(table_area.width / 3);
-    let val_w = 16u16.min(table_area.width / 4);
+    // The allowed range gets a column when there is room for it; it is
+    // always shown in full for the selected row in the box below.
+    let inner = table_area.width.saturating_sub(2);
+    let with_range = inner >= 60;
+    let header: &[&str] = if with_range {
+        &["key", "value", "allowed"]
+    } else {
+        &["key", "value"]
+    };
+    let cells: Vec<Vec<String>> = v
+        .rows
+        .iter()
+        .map(|r| vec![r.key.clone(), r.value.clone(), String::new()])
+        .collect();
+    let cols: &[Col] = if with_range {
+        &[Col::Auto(12, 27), Col::Auto(8, 20), Col::Fill(12)]
+    } else {
+        &[Col::Auto(12, 20), Col::Fill(8)]
+    };
+    let widths = column_widths(inner, cols, &content_widths(header, &cells));
     let rows: Vec<Row> = v
         .rows
         .iter()
         .enumerate()
         .map(|(i, r)| {
-            let value = if i == v.selected {
-                match &v.editing {
-                    Some(t) => format!("{t}▏"),
-                    None => r.value.clone(),
+            let value = match (&v.editing, i == v.selected) {
+                // The text being typed keeps its end (where the cursor is).
+                (Some(t), true) => {
+                    let t = format!("{t}▏");
+                    let n = t.chars().count();
+                    let keep = widths[1] as usize;
+                    t.chars().skip(n.saturating_sub(keep)).collect()
                 }
-            } else {
-                r.value.clone()
+                _ => trunc(&r.value, widths[1] as usize),
             };
             let vstyle = if r.changed {
                 theme.warn()
             } else {
                 theme.base()
             };
-            Row::new(vec![
-                Cell::from(r.key.clone()),
+            let mut cells = vec![
+                Cell::from(trunc(&r.key, widths[0] as usize)),
                 Cell::from(Span::styled(value, vstyle)),
-                Cell::from(Span::styled(r.range.clone(), theme.muted())),
-            ])
+            ];
+            if with_range {
+                cells.push(Cell::from(Span::styled(
+                    trunc(&r.range, widths[2] as usize),
+                    theme.muted(),
+                )));
+            }
+            Row::new(cells)
         })
         .collect();
-    let title = format!("Parameters — preset {} ({})", v.preset, v.params_source);
-    let t = Table::new(
-        rows,
-        [
-            Constraint::Length(key_w),
-            Constraint::Length(val_w),
-            Constraint::Min(6),
-        ],
-    )
-    .header(Row::new(vec!["key", "value", "allowed"]).style(theme.header()))
-    .row_highlight_style(theme.selected())
-    .block(block(title, theme));
+    // The source of the parameters, and the preset only when it says more.
+    let title = if v.params_source == format!("preset {}", v.preset) {
+        format!("Parameters — preset {}", v.preset)
+    } else {
+        format!("Parameters — {} (preset {})", v.params_source, v.preset)
+    };
+    let t = Table::new(rows, lengths(&widths))
+        .header(header_row(header, &widths, theme))
+        .row_highlight_style(theme.selected())
+        .block(block_in(table_area, &title, theme));
     let mut st = TableState::default().with_selected(Some(v.selected));
     f.render_stateful_widget(t, table_area, &mut st);
     // Edit line: what is being edited, the error of the last edit, or help.
@@ -69,7 +93,7 @@ pub(super) fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
     };
     f.render_widget(
         Paragraph::new(lines)
-            .block(block(edit_title, theme))
+            .block(block_in(edit_area, edit_title, theme))
             .wrap(Wrap { trim: false }),
         edit_area,
     );
@@ -134,21 +158,31 @@ pub(super) fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
     .areas(side);
     text_block(f, info, "Run", lines, theme);
     if fig_h > 0 {
-        let rows: Vec<Row> = v
+        let header = ["figure", "value", "ideal"];
+        let cells: Vec<Vec<String>> = v
             .figures
             .iter()
-            .map(|r| Row::new(vec![r.figure.clone(), r.value.clone(), r.ideal.clone()]))
+            .map(|r| vec![r.figure.clone(), r.value.clone(), r.ideal.clone()])
             .collect();
-        let t = Table::new(
-            rows,
-            [
-                Constraint::Min(12),
-                Constraint::Length(10),
-                Constraint::Length(8),
-            ],
-        )
-        .header(Row::new(vec!["figure", "value", "ideal"]).style(theme.header()))
-        .block(block("Summary (reported revolutions)", theme));
+        let widths = column_widths(
+            figs.width.saturating_sub(2),
+            &[Col::Fill(10), Col::Auto(5, 10), Col::Auto(5, 8)],
+            &content_widths(&header, &cells),
+        );
+        let rows: Vec<Row> = cells
+            .iter()
+            .map(|r| {
+                Row::new(
+                    r.iter()
+                        .zip(&widths)
+                        .map(|(c, w)| trunc(c, *w as usize))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .collect();
+        let t = Table::new(rows, lengths(&widths))
+            .header(header_row(&header, &widths, theme))
+            .block(block_in(figs, "Summary (reported revolutions)", theme));
         f.render_widget(t, figs);
     }
     if let (true, Some(c)) = (side_chart, &v.chart) {

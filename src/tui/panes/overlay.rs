@@ -16,10 +16,20 @@ pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme)
             theme,
         );
     } else {
+        // The charts share the crank angle: only the last one labels it.
         let n = charts.len() as u32;
         let rows = Layout::vertical(charts.iter().map(|_| Constraint::Ratio(1, n))).split(left);
-        for (c, r) in charts.iter().zip(rows.iter()) {
-            draw_chart(f, *r, c, theme);
+        for (i, (c, r)) in charts.iter().zip(rows.iter()).enumerate() {
+            draw_chart_with(
+                f,
+                *r,
+                c,
+                theme,
+                ChartFrame {
+                    border: true,
+                    x_labels: i + 1 == charts.len(),
+                },
+            );
         }
     }
     let mut lines = Vec::new();
@@ -82,30 +92,44 @@ pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme)
         text_block(f, calib_area, "Calibration (C)", calibration, theme);
     }
     if table_h > 0 {
-        let rows: Vec<Row> = v
+        let header = ["cycle", "RMS s mm", "RMS F N", "note"];
+        let cells: Vec<Vec<String>> = v
             .cycles
             .iter()
             .map(|c| {
-                Row::new(vec![
+                vec![
                     c.index.to_string(),
                     opt(c.stroke_rms_mm),
                     opt(c.force_rms_n),
                     c.note.clone(),
-                ])
+                ]
             })
             .collect();
-        let t = Table::new(
-            rows,
-            [
-                Constraint::Length(6),
-                Constraint::Length(9),
-                Constraint::Length(9),
-                Constraint::Min(4),
+        let widths = column_widths(
+            table_area.width.saturating_sub(2),
+            &[
+                Col::Auto(5, 6),
+                Col::Auto(7, 9),
+                Col::Auto(7, 9),
+                Col::Fill(4),
             ],
-        )
-        .header(Row::new(vec!["cycle", "RMS s mm", "RMS F N", "note"]).style(theme.header()))
-        .row_highlight_style(theme.selected())
-        .block(block("Cycles", theme));
+            &content_widths(&header, &cells),
+        );
+        let rows: Vec<Row> = cells
+            .into_iter()
+            .map(|r| {
+                Row::new(
+                    r.iter()
+                        .zip(&widths)
+                        .map(|(c, w)| trunc(c, *w as usize))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .collect();
+        let t = Table::new(rows, lengths(&widths))
+            .header(header_row(&header, &widths, theme))
+            .row_highlight_style(theme.selected())
+            .block(block("Cycles", theme));
         let mut st = TableState::default().with_selected(v.selected);
         f.render_stateful_widget(t, table_area, &mut st);
     }

@@ -105,7 +105,18 @@ pub(super) fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme)
             theme,
         );
     } else {
-        let path_w = (files_area.width as usize).saturating_sub(24).max(12);
+        let header = ["status", "kind", "file"];
+        let cells: Vec<Vec<String>> = v
+            .files
+            .iter()
+            .map(|r| vec![r.status.clone(), r.kind.clone(), r.path.clone()])
+            .collect();
+        let widths = column_widths(
+            files_area.width.saturating_sub(2),
+            &[Col::Auto(6, 7), Col::Auto(4, 10), Col::Fill(12)],
+            &content_widths(&header, &cells),
+        );
+        let file_w = widths[2] as usize;
         let rows: Vec<Row> = v
             .files
             .iter()
@@ -115,27 +126,43 @@ pub(super) fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme)
                 } else {
                     r.message.clone()
                 };
+                // The path first (its end kept), then what it holds in the
+                // room left, cut after a whole word.
+                let path = trunc_left(&r.path, file_w);
+                let room = file_w.saturating_sub(crate::tui::fit::width(&path) + 2);
+                let what = if room >= 4 {
+                    trunc(&what, room)
+                } else {
+                    String::new()
+                };
                 Row::new(vec![
-                    Cell::from(Span::styled(r.status.clone(), theme.status(&r.status))),
-                    Cell::from(r.kind.clone()),
+                    Cell::from(Span::styled(
+                        trunc(&r.status, widths[0] as usize),
+                        theme.status(&r.status),
+                    )),
+                    Cell::from(trunc(&r.kind, widths[1] as usize)),
                     Cell::from(Line::from(vec![
-                        Span::raw(trunc_left(&r.path, path_w)),
-                        Span::styled(format!("  {what}"), theme.muted()),
+                        Span::raw(path),
+                        Span::styled(
+                            if what.is_empty() {
+                                String::new()
+                            } else {
+                                format!("  {what}")
+                            },
+                            theme.muted(),
+                        ),
                     ])),
                 ])
             })
             .collect();
-        let table = Table::new(
-            rows,
-            [
-                Constraint::Length(7),
-                Constraint::Length(10),
-                Constraint::Min(10),
-            ],
-        )
-        .header(Row::new(vec!["status", "kind", "file"]).style(theme.header()))
-        .row_highlight_style(theme.selected())
-        .block(block(format!("Files ({})", v.files.len()), theme));
+        let table = Table::new(rows, lengths(&widths))
+            .header(header_row(&header, &widths, theme))
+            .row_highlight_style(theme.selected())
+            .block(block_in(
+                files_area,
+                &format!("Files ({})", v.files.len()),
+                theme,
+            ));
         let mut st = TableState::default().with_selected(Some(v.selected));
         f.render_stateful_widget(table, files_area, &mut st);
     }
@@ -195,7 +222,11 @@ pub(super) fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme)
             .collect();
         f.render_widget(
             Paragraph::new(lines)
-                .block(block(format!("Load errors ({})", v.errors.len()), theme))
+                .block(block_in(
+                    errs,
+                    &format!("Load errors ({})", v.errors.len()),
+                    theme,
+                ))
                 .wrap(Wrap { trim: false }),
             errs,
         );

@@ -12,7 +12,7 @@ pub(super) fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme)
         Layout::horizontal([Constraint::Length(side_w), Constraint::Min(10)]).areas(area);
     let w = side_w.saturating_sub(2) as usize;
     let mut lines = vec![
-        Line::styled(trunc(&v.source, w), theme.muted()),
+        Line::styled(trunc_left(&v.source, w), theme.muted()),
         kv_line(
             "window",
             format!("{:.3}–{:.3} s", v.window[0], v.window[1]),
@@ -42,13 +42,14 @@ pub(super) fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme)
             trunc(&format!("{check} {} ({})", c.name, c.unit), w),
             style,
         )]));
-        lines.push(Line::styled(
-            trunc(
-                &format!("    {} [{} … {}]", opt(c.at_cursor), opt(c.min), opt(c.max)),
-                w,
-            ),
-            theme.muted(),
-        ));
+        // The value at the cursor and the range in view, with four
+        // significant digits so the line fits the side column.
+        let (now, lo, hi) = (sig4(c.at_cursor), sig4(c.min), sig4(c.max));
+        let mut readout = format!("    {now} [{lo} … {hi}]");
+        if crate::tui::fit::width(&readout) > w {
+            readout = format!("  {now} [{lo}…{hi}]");
+        }
+        lines.push(Line::styled(trunc(&readout, w), theme.muted()));
     }
     text_block(f, side, "Channels", lines, theme);
     if v.charts.is_empty() {
@@ -62,9 +63,13 @@ pub(super) fn signals(f: &mut Frame, area: Rect, v: &SignalsView, theme: &Theme)
         );
         return;
     }
-    // Stacked charts share the time axis: only the last one labels it.
+    // Stacked charts share the time axis: only the last one labels it,
+    // and the block's bottom border names it with its unit.
     let n = v.charts.len() as u32;
-    let b = block("", theme);
+    let x_title = v.charts.last().map_or(String::new(), |c| {
+        crate::tui::fit::fit_axis(&c.x_label, charts.width.saturating_sub(4) as usize)
+    });
+    let b = block("", theme).title_bottom(Line::styled(x_title, theme.header()).right_aligned());
     let inner = b.inner(charts);
     f.render_widget(b, charts);
     let rows = Layout::vertical(v.charts.iter().map(|_| Constraint::Ratio(1, n))).split(inner);

@@ -3,7 +3,6 @@
 use super::*;
 
 pub(super) fn study(f: &mut Frame, area: Rect, v: &StudyView, theme: &Theme) {
-    let [head, body] = Layout::vertical([Constraint::Length(2), Constraint::Min(4)]).areas(area);
     let mut l1 = vec![
         Span::styled("factor ", theme.muted()),
         Span::styled(v.factor.clone(), theme.key()),
@@ -22,16 +21,33 @@ pub(super) fn study(f: &mut Frame, area: Rect, v: &StudyView, theme: &Theme) {
             theme.muted(),
         ),
     ];
-    if let Some(n) = &v.nominal {
-        l1.push(Span::styled(format!("  {n}"), theme.muted()));
+    // The nominal case beside the choices when it fits, else on a line
+    // of its own; every line wraps at word boundaries.
+    let mut head_lines = Vec::new();
+    let l1_w: usize = l1.iter().map(|s| s.width()).sum();
+    match &v.nominal {
+        Some(n) if l1_w + 2 + crate::tui::fit::width(n) <= area.width as usize => {
+            l1.push(Span::styled(format!("  {n}"), theme.muted()));
+            head_lines.push(Line::from(l1));
+        }
+        Some(n) => {
+            head_lines.push(Line::from(l1));
+            head_lines.push(Line::styled(n.clone(), theme.muted()));
+        }
+        None => head_lines.push(Line::from(l1)),
     }
-    f.render_widget(
-        Paragraph::new(vec![
-            Line::from(l1),
-            Line::styled(v.setup.clone(), theme.muted()),
-        ]),
-        head,
-    );
+    head_lines.push(Line::styled(v.setup.clone(), theme.muted()));
+    let head_h: usize = head_lines
+        .iter()
+        .map(|l| {
+            crate::tui::fit::wrap(&l.to_string(), area.width.max(1) as usize)
+                .len()
+                .max(1)
+        })
+        .sum();
+    let [head, body] =
+        Layout::vertical([Constraint::Length(head_h as u16), Constraint::Min(4)]).areas(area);
+    f.render_widget(Paragraph::new(head_lines).wrap(Wrap { trim: false }), head);
     if !v.ran {
         let msg = match &v.error {
             Some(e) => e.clone(),

@@ -17,17 +17,15 @@ pub(super) fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
     let [left, side] =
         Layout::horizontal([Constraint::Percentage(50), Constraint::Percentage(50)]).areas(area);
     let pct = |x: f64| format!("{:.1} %", 100.0 * x);
+    // An interval as one unbreakable range: `4.6–69.9 %`.
+    let range = |lo: f64, hi: f64| format!("{:.1}–{:.1} %", 100.0 * lo, 100.0 * hi);
     let mut lines = vec![Line::from(vec![
         Span::styled("yield ", theme.muted()),
         Span::styled(
             r.yield_frac.map(pct).unwrap_or_else(|| "–".into()),
             theme.header(),
         ),
-        Span::raw(format!(
-            "  95 % CI {}–{} (Wilson)",
-            pct(r.ci95.0),
-            pct(r.ci95.1)
-        )),
+        Span::raw(format!("  95 % CI {} (Wilson)", range(r.ci95.0, r.ci95.1))),
     ])];
     lines.push(kv_line(
         "connectors",
@@ -77,15 +75,26 @@ pub(super) fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
             .collect();
     for (what, gs) in groups {
         lines.push(Line::styled(format!("yield by {what}"), theme.header()));
+        let key_w = gs
+            .iter()
+            .map(|g| crate::tui::fit::width(&g.key))
+            .max()
+            .unwrap_or(0)
+            .min(14);
+        let count_w = gs
+            .iter()
+            .map(|g| format!("{}/{}", g.passed, g.inspected).len())
+            .max()
+            .unwrap_or(0);
         for g in gs {
+            let key = trunc(&g.key, key_w);
+            let pad = key_w.saturating_sub(crate::tui::fit::width(&key));
+            let count = format!("{}/{}", g.passed, g.inspected);
             lines.push(Line::raw(format!(
-                "{:<14} {:>3}/{:<3} {:>7}  CI {}–{}",
-                trunc(&g.key, 14),
-                g.passed,
-                g.inspected,
+                "{key}{} {count:>count_w$} {:>7} CI {}",
+                " ".repeat(pad),
                 g.yield_frac.map(pct).unwrap_or_else(|| "–".into()),
-                pct(g.ci95.0),
-                pct(g.ci95.1)
+                range(g.ci95.0, g.ci95.1)
             )));
         }
     }
@@ -103,53 +112,73 @@ pub(super) fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
     };
     let [wa, ia] = Layout::vertical([Constraint::Length(worst_h), Constraint::Min(3)]).areas(side);
     if worst_h > 0 {
-        let rows: Vec<Row> = worst
+        let header = ["part", "pin", "defects", "max off mm"];
+        let cells: Vec<Vec<String>> = worst
             .iter()
             .map(|p| {
-                Row::new(vec![
-                    trunc(&p.part_number, 14),
+                vec![
+                    p.part_number.clone(),
                     format!("{},{}", p.row, p.col),
                     format!("{}/{}", p.defects, p.inspected),
                     opt(p.max_offset_mm),
-                ])
+                ]
             })
             .collect();
-        let t = Table::new(
-            rows,
-            [
-                Constraint::Length(14),
-                Constraint::Length(5),
-                Constraint::Length(7),
-                Constraint::Min(6),
+        let widths = column_widths(
+            wa.width.saturating_sub(2),
+            &[
+                Col::Fill(8),
+                Col::Auto(3, 5),
+                Col::Auto(5, 7),
+                Col::Auto(7, 10),
             ],
-        )
-        .header(Row::new(vec!["part", "pin", "defects", "max off mm"]).style(theme.header()))
-        .block(block("Worst pins", theme));
+            &content_widths(&header, &cells),
+        );
+        let rows: Vec<Row> = cells
+            .iter()
+            .map(|r| {
+                Row::new(
+                    r.iter()
+                        .zip(&widths)
+                        .map(|(c, w)| trunc(c, *w as usize))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .collect();
+        let t = Table::new(rows, lengths(&widths))
+            .header(header_row(&header, &widths, theme))
+            .block(block("Worst pins", theme));
         f.render_widget(t, wa);
     }
-    let nw = ia.width.saturating_sub(30).max(8) as usize;
+    // Images by file name (the whole path is in the JSON and what `y` copies).
+    let name = |n: &str| n.rsplit(['/', '\\']).next().unwrap_or(n).to_string();
+    let header = ["image", "result", "note"];
+    let cells: Vec<Vec<String>> = v
+        .items
+        .iter()
+        .map(|it| vec![name(&it.name), it.status.clone(), it.note.clone()])
+        .collect();
+    let widths = column_widths(
+        ia.width.saturating_sub(2),
+        &[Col::Auto(8, 24), Col::Auto(6, 7), Col::Fill(8)],
+        &content_widths(&header, &cells),
+    );
     let rows: Vec<Row> = v
         .items
         .iter()
-        .map(|it| {
+        .zip(&cells)
+        .map(|(it, c)| {
             Row::new(vec![
-                Cell::from(trunc_left(&it.name, nw)),
+                Cell::from(trunc(&c[0], widths[0] as usize)),
                 Cell::from(Span::styled(it.status.clone(), theme.status(&it.status))),
-                Cell::from(it.note.clone()),
+                Cell::from(trunc(&c[2], widths[2] as usize)),
             ])
         })
         .collect();
-    let t = Table::new(
-        rows,
-        [
-            Constraint::Length(nw as u16),
-            Constraint::Length(6),
-            Constraint::Min(8),
-        ],
-    )
-    .header(Row::new(vec!["image", "result", "note"]).style(theme.header()))
-    .row_highlight_style(theme.selected())
-    .block(block(format!("Images ({})", v.items.len()), theme));
+    let t = Table::new(rows, lengths(&widths))
+        .header(header_row(&header, &widths, theme))
+        .row_highlight_style(theme.selected())
+        .block(block(format!("Images ({})", v.items.len()), theme));
     let mut st = TableState::default().with_selected(Some(v.selected));
     f.render_stateful_widget(t, ia, &mut st);
 }
