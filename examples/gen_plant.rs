@@ -6,8 +6,17 @@
 //! scale used) beside them.
 //!
 //! ```sh
-//! cargo run --release --example gen_plant -- N DIR [--mm-per-px 0.06] [--seed 0]
+//! cargo run --release --example gen_plant -- N DIR [--mm-per-px 0.06] [--seed 0] [--scenes S] [--skip-existing]
 //! ```
+//!
+//! Rendering a scene (anti-aliased tips, blur) is the slow part; with
+//! `--scenes S` only S scenes are rendered and image `i` is scene `i mod S`
+//! with sensor noise of its own added (σ 0.5–1.5 DN, seeded by `i`), so
+//! every image is a different picture (every measurement differs by what
+//! the noise moves) while poses and faults repeat every S images.
+//!
+//! `--skip-existing` keeps the images already there (an interrupted run
+//! continued; each image is written whole, through a temporary file).
 //!
 //! Writes `DIR/recipe/hdr-2x10.toml` and `DIR/img/NNN/pNNNNNNN.png`;
 //! nothing else (no truth files: the benchmark measures time and sizes,
@@ -52,6 +61,8 @@ fn main() -> anyhow::Result<()> {
     let dir = PathBuf::from(args.get(1).ok_or_else(|| anyhow::anyhow!(usage))?);
     let scale: f64 = arg(&args, "--mm-per-px").map_or(Ok(0.06), |s| s.parse())?;
     let seed: u64 = arg(&args, "--seed").map_or(Ok(0), |s| s.parse())?;
+    let scenes: usize = arg(&args, "--scenes").map_or(Ok(n), |s| s.parse())?;
+    let skip_existing = args.iter().any(|a| a == "--skip-existing");
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/interop/images/hdr-2x10.toml");
     let mut recipe = Recipe::load(&src)?;
     recipe.mm_per_px = Some(scale);
@@ -62,28 +73,55 @@ fn main() -> anyhow::Result<()> {
     for f in 0..n.div_ceil(1000) {
         std::fs::create_dir_all(dir.join(format!("img/{f:03}")))?;
     }
+    let render = |i: usize| {
+        let mut rng = Rng::new(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
+        let mut sc = Scene::nominal(&recipe, scale);
+        sc.randomise(&mut rng, 3.0, 8.0, 0.8);
+        sc.noise_dn = rng.range(0.0, 1.5);
+        sc.seed = i as u64;
+        let k = (rng.uniform() * sc.pins.len() as f64) as usize % sc.pins.len();
+        match (rng.uniform() * 12.0) as u32 {
+            0 => sc.pins[k].present = false,
+            1 => {
+                let a = rng.range(0.0, std::f64::consts::TAU);
+                sc.pins[k].offset_mm = (0.2 * a.cos(), 0.2 * a.sin());
+            }
+            2 => sc.pins[k].damage = Damage::Scaled(0.6),
+            _ => {}
+        }
+        sc.render().0
+    };
+    let rendered: Vec<pinsight::vision::Gray> = if scenes < n {
+        (0..scenes).into_par_iter().map(render).collect()
+    } else {
+        Vec::new()
+    };
     let bytes: u64 = (0..n)
         .into_par_iter()
         .map(|i| {
-            let mut rng = Rng::new(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
-            let mut sc = Scene::nominal(&recipe, scale);
-            sc.randomise(&mut rng, 3.0, 8.0, 0.8);
-            sc.noise_dn = rng.range(0.0, 1.5);
-            sc.seed = i as u64;
-            let k = (rng.uniform() * sc.pins.len() as f64) as usize % sc.pins.len();
-            match (rng.uniform() * 12.0) as u32 {
-                0 => sc.pins[k].present = false,
-                1 => {
-                    let a = rng.range(0.0, std::f64::consts::TAU);
-                    sc.pins[k].offset_mm = (0.2 * a.cos(), 0.2 * a.sin());
-                }
-                2 => sc.pins[k].damage = Damage::Scaled(0.6),
-                _ => {}
-            }
-            let (g, _) = sc.render();
-            let data = png(&g);
             let file = dir.join(format!("img/{:03}/p{i:07}.png", i / 1000));
-            std::fs::write(&file, &data).expect("write image");
+            if skip_existing && let Ok(m) = std::fs::metadata(&file) {
+                return m.len();
+            }
+            let g = if scenes < n {
+                let mut g = rendered[i % scenes].clone();
+                let mut rng = Rng::new(seed ^ 0x5eed_0000_0000 ^ i as u64);
+                let sigma = rng.range(0.5, 1.5);
+                if let GrayData::U8(d) = &mut g.data {
+                    for v in d.iter_mut() {
+                        *v = (*v as f64 + sigma * rng.normal()).round().clamp(0.0, 255.0) as u8;
+                    }
+                }
+                g
+            } else {
+                render(i)
+            };
+            let data = png(&g);
+            // Whole files only: an interrupted run leaves no truncated
+            // image for --skip-existing to keep.
+            let tmp = file.with_extension("png.tmp");
+            std::fs::write(&tmp, &data).expect("write image");
+            std::fs::rename(&tmp, &file).expect("rename image");
             data.len() as u64
         })
         .sum();
