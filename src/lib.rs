@@ -40,6 +40,7 @@ pub mod engine;
 pub mod export;
 pub mod fmt;
 pub mod input;
+pub mod live;
 pub mod methods;
 pub mod model;
 pub mod output;

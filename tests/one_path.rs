@@ -489,3 +489,128 @@ fn the_trend_is_one_answer_from_cli_the_trend_pane_and_batch() {
     );
     assert!(batch == cli, "batch export differs from pinsight trend");
 }
+
+#[test]
+fn calibrate_is_one_answer_from_cli_the_overlay_pane_and_batch_and_a_damaged_log_the_same_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let log = repo("fixtures/interop/logs/run-1200-blocks.mcap");
+    let log = log.to_str().unwrap();
+    // A damaged log: the good log cut at 15 % of its bytes keeps 3
+    // cycles, too few to calibrate; a file that is not MCAP at all.
+    let bytes = std::fs::read(log).unwrap();
+    let cut = d.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 15 / 100]).unwrap();
+    let cut = cut.to_str().unwrap();
+    let junk = d.join("junk.mcap");
+    std::fs::write(&junk, [0xdfu8; 3000]).unwrap();
+    let junk = junk.to_str().unwrap();
+
+    let mut cli = run_json(&["calibrate", log, "--json"], d);
+    let render_args = |log: &str| -> Vec<String> {
+        ["render", "overlay", log, "--ui", "overlay.calibrate=yes"]
+            .into_iter()
+            .chain(["--format", "json"])
+            .map(String::from)
+            .collect()
+    };
+    let args = render_args(log);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let mut render = run_json(&args, d)["calibration"].take();
+    // The batch: run calibrate, checks on its figures, the pane exported.
+    let script = format!(
+        "[[step]]\nkind = \"load\"\npaths = [\"{log}\", \"{cut}\"]\n\n\
+         [[step]]\nkind = \"run\"\nwhat = \"calibrate\"\n\n\
+         [[step]]\nkind = \"check\"\npane = \"overlay\"\nfigure = \"calibration.clearance_mm\"\nop = \"<\"\nvalue = 0.2\n\n\
+         [[step]]\nkind = \"check\"\npane = \"overlay\"\nfigure = \"calibration.after.stroke_mean_rms_mm\"\nop = \"<\"\nvalue = 0.02\n\n\
+         [[step]]\nkind = \"export\"\npane = \"overlay\"\npath = \"overlay.json\"\n\n\
+         [[step]]\nkind = \"export\"\npane = \"overlay\"\nui = {{ \"overlay.log\" = 1 }}\npath = \"cut.json\"\n"
+    );
+    std::fs::write(d.join("script.toml"), script).unwrap();
+    let out = d.join("batch-out");
+    let o = bin()
+        .arg("batch")
+        .arg(d.join("script.toml"))
+        .arg("--out")
+        .arg(&out)
+        .arg("--json")
+        .arg(d.join("report.json"))
+        .output()
+        .unwrap();
+    let read = |p: &Path| -> Value {
+        let text = std::fs::read_to_string(p).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}\nstdout: {}\nstderr: {}",
+                p.display(),
+                String::from_utf8_lossy(&o.stdout),
+                String::from_utf8_lossy(&o.stderr)
+            )
+        });
+        serde_json::from_str(&text).unwrap()
+    };
+    let report = read(&d.join("report.json"));
+    let mut batch = read(&out.join("overlay.json"))["calibration"].take();
+    let batch_cut = read(&out.join("cut.json"))["calibration"].take();
+
+    let mut render_report = render["report"].take();
+    let mut batch_report = batch["report"].take();
+    for v in [&mut cli, &mut render_report, &mut batch_report] {
+        without_timings(v);
+    }
+    let est = &cli["estimates"][0];
+    assert_eq!(est["name"], "clearance", "{cli:#}");
+    assert_eq!(cli["cycles"], 20, "{cli:#}");
+    assert!(
+        render_report == cli,
+        "render overlay's calibration differs from pinsight calibrate"
+    );
+    assert!(
+        batch_report == cli,
+        "the batch export's calibration differs from pinsight calibrate"
+    );
+    // The pane's figures are the report's.
+    for pane in [&render, &batch] {
+        assert_eq!(pane["clearance_mm"], est["value"]);
+        assert_eq!(pane["clearance_u95_mm"], est["u95"]);
+        assert_eq!(pane["after"], cli["after"]);
+        assert_eq!(pane["before"], cli["before"]);
+    }
+    // The batch's checks on the figures pass; the cut log is a step error.
+    let steps = report["steps"].as_array().unwrap();
+    let outcomes: Vec<&str> = steps
+        .iter()
+        .map(|s| s["outcome"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        outcomes,
+        ["ok", "error", "pass", "pass", "ok", "ok"],
+        "{report:#}"
+    );
+
+    // The damaged log: the same error from the command line, the pane
+    // rendered headless and the batch (its run step and its export).
+    let o = bin().args(["calibrate", cut]).output().unwrap();
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let args = render_args(cut);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let render_cut = run_json(&args, d)["calibration"].take();
+    let reason = render_cut["error"].as_str().unwrap();
+    assert!(
+        reason.contains("calibration needs at least 4 usable cycles") && reason.contains(cut),
+        "{reason}"
+    );
+    assert!(stderr.contains(reason), "CLI: {stderr}\npane: {reason}");
+    assert_eq!(batch_cut["error"].as_str(), Some(reason));
+    assert!(steps[1]["detail"].as_str().unwrap().contains(reason));
+    // A file that is not MCAP: the command line's error and the session's entry.
+    let o = bin().args(["calibrate", junk]).output().unwrap();
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let session = run_json(&["render", "session", junk, "--format", "json"], d);
+    let entry = &session["files"][0];
+    assert_eq!(entry["status"], "error", "{session:#}");
+    let reason = entry["message"].as_str().unwrap();
+    assert!(reason.contains("not an MCAP file"), "{reason}");
+    assert!(stderr.contains(reason), "CLI: {stderr}\nsession: {reason}");
+}

@@ -399,3 +399,47 @@ fn a_cancelled_yield_is_not_restarted_until_asked() {
     run_jobs(&mut app);
     assert!(app.session.yields.is_some());
 }
+
+/// The Overlay pane calibrates its log on `C` (a background job with a
+/// gauge, never by itself): the pane then shows the fitted clearance ±
+/// U95, standoff, lags and the residual before → after, from the same job
+/// as `pinsight calibrate`.
+#[test]
+fn the_overlay_pane_calibrates_its_log_on_capital_c() {
+    let mut app = new_app();
+    app.update(key(KeyCode::Char('3')));
+    run_jobs(&mut app);
+    assert!(app.session.calibrations.is_empty(), "not run by itself");
+    assert!(!screen(&app, 120, 40).contains("Calibration (C)"));
+    app.update(key(KeyCode::Char('C')));
+    assert!(
+        app.running.iter().any(|r| r.label.contains("calibrating")),
+        "{:?}",
+        app.running.iter().map(|r| &r.label).collect::<Vec<_>>()
+    );
+    run_jobs(&mut app);
+    let run = app.session.calibration_of(0).expect("calibrated");
+    let report = run.report.as_ref().expect("the demo log calibrates");
+    let (log, cycles) = app.session.logs[0].rig.clone().unwrap();
+    let direct = pinsight::engine::calibrate::run_calibration(
+        0,
+        &log,
+        &cycles,
+        &pinsight::progress::Progress::hidden(),
+    );
+    let direct = direct.report.unwrap();
+    assert_eq!(
+        serde_json::to_value(&**report).unwrap(),
+        serde_json::to_value(&*direct).unwrap()
+    );
+    let view = pinsight::panes::overlay::view(&app.session, &app.ui);
+    let c = view.calibration.expect("the pane shows the calibration");
+    let clearance = &report.estimates[0];
+    assert_eq!(clearance.name, "clearance");
+    assert_eq!(c.clearance_mm, Some(clearance.value));
+    assert_eq!(c.clearance_u95_mm, Some(clearance.u95));
+    let s = screen(&app, 120, 40);
+    assert!(s.contains("Calibration (C)"), "{s}");
+    assert!(s.contains("clearance:"), "{s}");
+    assert!(s.contains("stroke mean RMS:"), "{s}");
+}

@@ -236,3 +236,106 @@ fn tui_in_tmux_switch_panes_help_edit_bad_input_quit() {
         std::thread::sleep(Duration::from_millis(50));
     }
 }
+
+/// The live line in the real terminal: `rig-sim` writes at 2× real time
+/// while `pinsight tui --follow` shows it; the panes update, `F` pauses the
+/// Signals window (it stays put while cycles keep coming) and resumes it,
+/// and the burst of faulty connectors raises an alarm in the status line.
+#[test]
+fn tui_follows_a_live_line_pauses_resumes_and_shows_an_alarm() {
+    if !tmux_available() {
+        eprintln!("SKIPPED: tmux is not installed; the live end-to-end test did not run");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("run.mcap");
+    let img = dir.path().join("img");
+    let bin = env!("CARGO_BIN_EXE_pinsight");
+    let mut sim = Command::new(bin)
+        .args([
+            "rig-sim",
+            "--rpm",
+            "1500",
+            "--rate",
+            "2x",
+            "--duration",
+            "40s",
+        ])
+        .args(["--faults", "burst@5s-8s", "--out"])
+        .arg(&log)
+        .arg("--images")
+        .arg(&img)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t = Tmux {
+        sock: format!("pinsight-e2e-live-{}", std::process::id()),
+    };
+    let started = t.cmd(&[
+        "new-session",
+        "-d",
+        "-s",
+        "e2e",
+        "-x",
+        "120",
+        "-y",
+        "36",
+        &format!(
+            "env TERM=xterm-256color {bin} tui --images halfblocks --pane signals --follow {} {}",
+            log.display(),
+            img.display()
+        ),
+    ]);
+    assert!(started.status.success());
+    t.cmd(&["set-option", "-t", "e2e", "remain-on-exit", "on"]);
+    let cycles = |s: &str| -> Option<u64> {
+        let i = s.find(" cycles · ")?;
+        let head = &s[..i];
+        let j = head.rfind(' ')?;
+        head[j + 1..].parse().ok()
+    };
+    let window = |s: &str| -> Option<String> {
+        let i = s.find("window: ")?;
+        Some(s[i..].split('│').next()?.trim().to_string())
+    };
+    let s1 = t.wait("following with cycles", 20.0, |s| {
+        s.contains("▶ FOLLOW") && cycles(s).is_some_and(|c| c > 10)
+    });
+    let n1 = cycles(&s1).unwrap();
+    // Panes update: more cycles, the window moves with the newest data.
+    let s2 = t.wait("more cycles", 10.0, |s| {
+        cycles(s).is_some_and(|c| c > n1 + 20)
+    });
+    assert_ne!(window(&s1), window(&s2), "the Signals window follows");
+    // F pauses: the window stays while cycles keep coming.
+    t.keys(&["F"]);
+    let p1 = t.wait_for("PAUSED", 5.0);
+    let w = window(&p1);
+    let np = cycles(&p1).unwrap();
+    let p2 = t.wait("cycles while paused", 10.0, |s| {
+        cycles(s).is_some_and(|c| c > np + 20)
+    });
+    assert!(p2.contains("PAUSED"));
+    assert_eq!(window(&p2), w, "paused: the window stays");
+    // End resumes.
+    t.keys(&["End"]);
+    let r = t.wait_for("▶ FOLLOW", 5.0);
+    let r2 = t.wait("window moving again", 10.0, |s| window(s) != window(&r));
+    assert!(r2.contains("▶ FOLLOW"));
+    // The burst of faulty connectors: the yield alarm in the status line.
+    let a = t.wait_for("ALARM", 30.0);
+    assert!(a.contains("yield_below"), "{a}");
+    // Vision shows the latest connector, Yield counts, Session lists the alarm.
+    t.keys(&["6"]);
+    t.wait_for("verdict:", 10.0);
+    t.keys(&["7"]);
+    t.wait_for("Wilson", 10.0);
+    t.keys(&["1"]);
+    t.wait("the Session pane's live box", 10.0, |s| {
+        s.contains("Live") && s.contains("ALARM yield_below")
+    });
+    t.keys(&["q"]);
+    t.wait("exit", 10.0, |_| t.pane_state().starts_with('1'));
+    let _ = sim.kill();
+    let _ = sim.wait();
+}

@@ -6,7 +6,7 @@
 //! The floors below are a **ratchet at the level last measured**, less a
 //! small margin (2026-11-24: 90.0 % verdicts, 98.14 % pin statuses, 6
 //! errors, median 0.081 px on these 240; 2026-11-25: 91.2 %, 98.43 %, 4
-//! errors, 0.080 px), not issue 12's targets (≥ 99.5 % verdicts,
+//! errors, 0.080 px; 2026-11-26: 91.7 %, 98.43 %, 4 errors, 0.080 px), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -87,7 +87,7 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 90.8,
+        pct(right, n) >= 91.3,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );

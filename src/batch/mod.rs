@@ -243,6 +243,87 @@ fn kind_of(v: &Value) -> &'static str {
     }
 }
 
+/// A job run on every log of the session (batch `run overlay`, `run
+/// calibrate`): `job` gives each log's detail line, its error, or nothing
+/// (the log was not run); an error when no log is loaded or any failed,
+/// every log's line either way.
+fn each_log(
+    session: &mut Session,
+    mut job: impl FnMut(&mut Session, usize) -> Option<Result<String, String>>,
+) -> Result<String, String> {
+    if session.logs.is_empty() {
+        return Err("no rig log loaded".into());
+    }
+    let mut msgs = Vec::new();
+    let mut failed = false;
+    for i in 0..session.logs.len() {
+        match job(session, i) {
+            Some(Ok(m)) => msgs.push(m),
+            Some(Err(e)) => {
+                failed = true;
+                msgs.push(e);
+            }
+            None => {}
+        }
+    }
+    if failed {
+        Err(msgs.join("; "))
+    } else {
+        Ok(msgs.join("; "))
+    }
+}
+
+/// A batch `run overlay` step: every log of the session compared with the
+/// model; the detail line per log (cycles, stroke RMS residual, time).
+pub fn run_overlay_step(session: &mut Session) -> Result<String, String> {
+    each_log(session, |s, i| {
+        s.run_overlay_now(i);
+        let r = s.overlay_of(i)?;
+        Some(match &r.report {
+            Ok(rep) => Ok(format!(
+                "{}: {} cycles, stroke RMS {:.4} mm, {:.0} ms",
+                s.logs[i].path, rep.run.cycles, rep.run.stroke_rms_err_mm, r.wall_ms
+            )),
+            Err(e) => Err(e.clone()),
+        })
+    })
+}
+
+/// A batch `run calibrate` step: every log of the session calibrated
+/// against the model (as `pinsight calibrate LOG` with no options; the
+/// Overlay pane shows the result); the detail line per log (clearance ±
+/// U95, standoff, residual of the mean stroke before → after, time).
+pub fn run_calibrate_step(
+    session: &mut Session,
+    progress: &crate::progress::Progress,
+) -> Result<String, String> {
+    each_log(session, |s, i| {
+        s.run_calibration_with(i, progress);
+        let r = s.calibration_of(i)?;
+        let rep = match &r.report {
+            Ok(rep) => rep,
+            Err(e) => return Some(Err(e.clone())),
+        };
+        let est = |name: &str| {
+            rep.estimates
+                .iter()
+                .find(|e| e.name == name)
+                .map_or("–".to_string(), |e| {
+                    format!("{:.4} ± {:.4}", e.value, e.u95)
+                })
+        };
+        Some(Ok(format!(
+            "{}: clearance {} mm, standoff {} mm, stroke mean RMS {:.4} → {:.4} mm, {:.0} ms",
+            s.logs[i].path,
+            est("clearance"),
+            est("standoff"),
+            rep.before.stroke_mean_rms_mm,
+            rep.after.stroke_mean_rms_mm,
+            r.wall_ms
+        )))
+    })
+}
+
 /// A batch `run trend` step: the wear trend over the session's logs; the
 /// detail line (logs, calibrations, each head's verdict), an error when a
 /// log was left out or the trend could not run.

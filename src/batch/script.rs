@@ -24,7 +24,7 @@
 //! study = { clearances_mm = [0.1, 0.5], speeds_rpm = [1200], materials = ["alloy_steel"], warmup = 1, revs = 1 }
 //!
 //! [[step]]
-//! kind = "run"                       # model | study | methods | yield | overlay | monitor | trend
+//! kind = "run"                       # model | study | methods | yield | overlay | calibrate | monitor | trend
 //! what = "model"
 //!
 //! [[step]]
@@ -478,7 +478,7 @@ impl Runner {
                     index,
                     "run",
                     "",
-                    "give `what` (model, study, methods, yield, overlay, monitor or trend)",
+                    "give `what` (model, study, methods, yield, overlay, calibrate, monitor or trend)",
                 );
             }
             Err(e) => return err(index, "run", "", e),
@@ -540,34 +540,14 @@ impl Runner {
                     None => err(index, "run", "yield", "the yield did not run"),
                 }
             }
-            "overlay" => {
-                if self.session.logs.is_empty() {
-                    return err(index, "run", "overlay", "no rig log loaded");
-                }
-                let mut msgs = Vec::new();
-                let mut failed = false;
-                for i in 0..self.session.logs.len() {
-                    self.session.run_overlay_now(i);
-                    if let Some(r) = self.session.overlay_of(i) {
-                        match &r.report {
-                            Ok(rep) => msgs.push(format!(
-                                "{}: {} cycles, stroke RMS {:.4} mm, {:.0} ms",
-                                self.session.logs[i].path,
-                                rep.run.cycles,
-                                rep.run.stroke_rms_err_mm,
-                                r.wall_ms
-                            )),
-                            Err(e) => {
-                                failed = true;
-                                msgs.push(e.clone());
-                            }
-                        }
-                    }
-                }
-                if failed {
-                    err(index, "run", "overlay", msgs.join("; "))
-                } else {
-                    ok(index, "run", "overlay", msgs.join("; "))
+            "overlay" => match super::run_overlay_step(&mut self.session) {
+                Ok(d) => ok(index, "run", "overlay", d),
+                Err(d) => err(index, "run", "overlay", d),
+            },
+            "calibrate" => {
+                match super::run_calibrate_step(&mut self.session, &self.progress.child()) {
+                    Ok(d) => ok(index, "run", "calibrate", d),
+                    Err(d) => err(index, "run", "calibrate", d),
                 }
             }
             "monitor" => {
@@ -614,7 +594,7 @@ impl Runner {
                 "run",
                 other,
                 format!(
-                    "cannot run `{other}` (allowed: model, study, methods, yield, overlay, monitor, trend)"
+                    "cannot run `{other}` (allowed: model, study, methods, yield, overlay, calibrate, monitor, trend)"
                 ),
             ),
         }

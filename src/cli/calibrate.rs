@@ -3,7 +3,9 @@
 //! load cell's lag against the model (see [`crate::overlay::calibrate`]),
 //! prints each estimate with its uncertainty and the residual before/after,
 //! and writes a parameter file that `simulate --params` and
-//! `overlay --params` read.
+//! `overlay --params` read. The job is the engine's
+//! ([`crate::engine::calibrate::calibrate_job`]), as for the Overlay pane's
+//! calibration and batch `run calibrate`.
 //!
 //! Several logs (files or folders of them), or `--shard k/n` (one part of
 //! the sorted logs, docs/scale.md): `--out` is a folder and each log gets
@@ -14,11 +16,11 @@
 use super::common::ParamArgs;
 use super::overlay::load_and_cycles;
 use crate::cli::common::{outln, outp};
-use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport, calibrate};
-use crate::overlay::compare::model_params;
+use crate::engine::calibrate::calibrate_job;
+use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport};
+pub use crate::overlay::outputs::calibration_text as summary_text;
 use crate::progress::{Progress, ProgressBarGuard};
 use anyhow::{anyhow, bail};
-use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -139,60 +141,8 @@ fn calibrate_one(args: &Args, path: &std::path::Path) -> anyhow::Result<Calibrat
     let lopts = args.log_read.load_options()?;
     let (log, file_params, cs) =
         load_and_cycles(path, &lopts, &args.params, args.points, !args.json)?;
-    let (base, notes) = model_params(&log, file_params, &args.params.sets)
-        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
     let progress = Progress::new(0);
-    let mut report = {
-        let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "calibrate"));
-        calibrate(&log, &cs, &base, &opts, &progress)?
-    };
-    report.notes.splice(0..0, notes);
-    Ok(report)
-}
-
-/// The text summary.
-pub fn summary_text(r: &CalibrationReport) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "calibrate {}: {} cycles at {:.1} rpm",
-        r.file, r.cycles, r.motor_rpm
-    );
-    let _ = writeln!(
-        s,
-        "  {:<14} {:>10} {:>12} {:>10} {:>10}  unit",
-        "estimate", "nominal", "value", "σ", "U95"
-    );
-    for e in &r.estimates {
-        let _ = writeln!(
-            s,
-            "  {:<14} {:>10} {:>12.5} {:>10.5} {:>10.5}  {}",
-            e.name,
-            e.nominal.map_or("-".to_string(), |v| format!("{v:.4}")),
-            e.value,
-            e.sigma,
-            e.u95,
-            e.unit
-        );
-    }
-    if !r.f_ins_table.is_empty() {
-        let _ = writeln!(s, "  F_ins table (depth mm → N ± σ):");
-        for (d, f, sg) in &r.f_ins_table {
-            let _ = writeln!(s, "    {d:>6.3} → {f:>8.3} ± {sg:.3}");
-        }
-    }
-    let _ = writeln!(
-        s,
-        "  residual before: stroke spread {:.4} mm, stroke mean {:.4} mm, force {:.3} N",
-        r.before.stroke_spread_rms_mm, r.before.stroke_mean_rms_mm, r.before.force_rms_n
-    );
-    let _ = writeln!(
-        s,
-        "  residual after:  stroke spread {:.4} mm, stroke mean {:.4} mm, force {:.3} N",
-        r.after.stroke_spread_rms_mm, r.after.stroke_mean_rms_mm, r.after.force_rms_n
-    );
-    for n in &r.notes {
-        let _ = writeln!(s, "  note: {n}");
-    }
-    s
+    let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "calibrate"));
+    calibrate_job(&log, &cs, file_params, &args.params.sets, &opts, &progress)
+        .map_err(anyhow::Error::msg)
 }

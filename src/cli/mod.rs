@@ -7,6 +7,7 @@ use std::process::ExitCode;
 pub mod batch;
 pub mod calibrate;
 pub mod common;
+pub mod demo;
 pub mod inspect;
 pub mod log;
 pub mod merge;
@@ -14,10 +15,12 @@ pub mod methods;
 pub mod monitor;
 pub mod overlay;
 pub mod render;
+pub mod rig_sim;
 pub mod simulate;
 pub mod sweep;
 pub mod trend;
 pub mod tui;
+pub mod watch;
 pub mod yield_report;
 
 #[derive(Debug, Parser)]
@@ -60,6 +63,12 @@ pub enum Command {
     Methods(methods::Args),
     /// Open the terminal workstation on the given files.
     Tui(tui::Args),
+    /// The demo: the embedded session, or `--live` a simulated line followed live.
+    Demo(demo::Args),
+    /// Follow rig logs being written and folders where images arrive (headless; JSON lines).
+    Watch(watch::Args),
+    /// A simulated rig writing its log (and connector photographs) in real time.
+    RigSim(rig_sim::Args),
     /// Render one pane headless (text, JSON, CSV or PNG).
     Render(render::Args),
     /// Run a batch script of steps and checks.
@@ -100,6 +109,9 @@ pub fn main() -> ExitCode {
         Some(Command::Merge(a)) => merge::run(a),
         Some(Command::Methods(a)) => methods::run(a),
         Some(Command::Tui(a)) => tui::run(a),
+        Some(Command::Watch(a)) => watch::run(a),
+        Some(Command::Demo(a)) => demo::run(a),
+        Some(Command::RigSim(a)) => rig_sim::run(a),
         Some(Command::Render(a)) => render::run(a),
         Some(Command::Batch(a)) => batch::run(a),
     };

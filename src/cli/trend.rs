@@ -1,4 +1,4 @@
-//! `pinsight trend LOGS_OR_DIRS... [--by rig|none] [--model linear]
+//! `pinsight trend LOGS_OR_DIRS... [--by rig|none] [--model linear|archard]
 //! [--limit MM | --tolerance MM | -r RECIPE] [--out DIR] [--json] [--cache FILE]`:
 //! the wear trend of each head and the forecast of when its clearance
 //! reaches the limit ([`crate::engine::trend`]).
@@ -39,7 +39,8 @@ pub struct Args {
     /// Group the logs into heads.
     #[arg(long, value_enum, default_value = "rig")]
     pub by: By,
-    /// Degradation model: linear (archard is not built yet).
+    /// Degradation model: linear in the head's cycles, or archard (dc/dn =
+    /// k·W(c), W the sliding work per cycle the model simulates).
     #[arg(long, default_value = "linear")]
     pub model: String,
     /// The clearance limit (mm), replacing the derivation from a tolerance.

@@ -20,6 +20,18 @@ pub struct Args {
     /// Pane to start on (session, signals, overlay, model, study, vision, yield, methods, line, trend).
     #[arg(long, default_value = "session")]
     pub pane: String,
+    /// Follow these logs (.mcap, while written) and folders (images, new logs) live.
+    #[arg(long, value_name = "PATH", num_args = 1..)]
+    pub follow: Vec<std::path::PathBuf>,
+    /// With --follow: poll every DURATION instead of file-system events (network shares).
+    #[arg(long, value_name = "DURATION")]
+    pub poll: Option<String>,
+    /// With --follow: vision recipe(s) of the images (default: the simulated line's connector).
+    #[arg(long = "recipe")]
+    pub recipes: Vec<std::path::PathBuf>,
+    /// With --follow: TOML with [follow] and [alarms] sections.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<std::path::PathBuf>,
 }
 
 /// The session `tui` and `render` open: the demo when no path is given,
@@ -81,12 +93,34 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "the TUI needs a terminal on stdin and stdout; use `pinsight render PANE` or `pinsight batch SCRIPT` for headless output"
         );
     }
+    let follow = if args.follow.is_empty() {
+        None
+    } else {
+        Some(super::watch::inputs(
+            &args.follow,
+            &args.recipes,
+            None,
+            0,
+            args.config.as_ref(),
+            args.poll.as_deref(),
+            &super::common::LogReadArgs {
+                channels: None,
+                meta: Vec::new(),
+            },
+        )?)
+    };
+    let session = if follow.is_some() && args.paths.is_empty() {
+        Session::new("live")
+    } else {
+        session
+    };
     crate::tui::run(
         session,
         crate::tui::Options {
             images,
             theme: None,
             pane,
+            follow,
         },
     )?;
     Ok(ExitCode::SUCCESS)

@@ -58,19 +58,26 @@ pub fn load_for_overlay(
         }
     };
     let cs = cycles_of(&log, geometry, points);
-    if log.signals.displacement.is_none() {
-        return Err(format!(
-            "{}: no displacement channel ({}): the stroke cannot be compared",
-            path.display(),
-            log.report
-                .findings
-                .iter()
-                .map(|f| f.message.clone())
-                .collect::<Vec<_>>()
-                .join("; ")
-        ));
-    }
+    require_displacement(&log)?;
     Ok((log, cs))
+}
+
+/// A log with no displacement channel cannot be compared with the model:
+/// the error names the file and what the loader found.
+pub fn require_displacement(log: &RigLog) -> Result<(), String> {
+    if log.signals.displacement.is_some() {
+        return Ok(());
+    }
+    Err(format!(
+        "{}: no displacement channel ({}): the stroke cannot be compared",
+        log.file,
+        log.report
+            .findings
+            .iter()
+            .map(|f| f.message.clone())
+            .collect::<Vec<_>>()
+            .join("; ")
+    ))
 }
 
 /// The fidelity level `--level auto` picks for a log's overlay: the

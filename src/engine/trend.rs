@@ -6,10 +6,11 @@
 //! ([`crate::wear`]). The one path of `pinsight trend`, the Trend pane,
 //! `render trend` and batch `run trend`.
 
-use crate::overlay::calibrate::{CalibrateOptions, calibrate};
+use crate::overlay::calibrate::CalibrateOptions;
 use crate::overlay::compare::model_params;
 use crate::progress::Progress;
 use crate::rig::LoadOptions;
+use crate::wear::archard::{ArchardFit, WearWork, work_ladder};
 use crate::wear::history::{self, HEAD_CYCLES_KEY, HistoryPoint};
 use crate::wear::limit::{ClearanceLimit, DEFAULT_LADDER_MM, derive_limit};
 use crate::wear::report::{HeadTrend, ItemError, TrendReport, WearModel};
@@ -40,6 +41,9 @@ pub struct TrendOptions {
     /// The limit's clearance ladder (mm) and revolutions simulated at each.
     pub ladder_mm: Vec<f64>,
     pub limit_revs: usize,
+    /// Revolutions simulated at each clearance of the ladder for the Archard
+    /// model's sliding work W(c).
+    pub work_revs: usize,
 }
 
 impl Default for TrendOptions {
@@ -55,6 +59,7 @@ impl Default for TrendOptions {
             points: 720,
             ladder_mm: DEFAULT_LADDER_MM.to_vec(),
             limit_revs: 60,
+            work_revs: 40,
         }
     }
 }
@@ -168,8 +173,14 @@ pub fn calibrate_log(
     if log.signals.displacement.is_none() {
         return Err("no displacement channel: the clearance cannot be calibrated".into());
     }
-    let r = calibrate(&log, &cs, &base, &opts.calibrate, &Progress::hidden())
-        .map_err(|e| e.to_string())?;
+    let r = super::calibrate::calibrate_job(
+        &log,
+        &cs,
+        None,
+        &[],
+        &opts.calibrate,
+        &Progress::hidden(),
+    )?;
     let e = r
         .estimates
         .iter()
@@ -330,9 +341,15 @@ pub fn trend_report(
 fn assumptions(opts: &TrendOptions) -> Vec<String> {
     let mut a = vec![
         "each log's clearance is the calibration's (preset paper + the log's rig metadata), weighted by its U95/2".into(),
-        format!(
-            "wear is linear in the head's cumulative cycles (metadata {HEAD_CYCLES_KEY}; days since the first log when a log lacks it) and continues at the fitted rate"
-        ),
+        match opts.model {
+            WearModel::Linear => format!(
+                "wear is linear in the head's cumulative cycles (metadata {HEAD_CYCLES_KEY}; days since the first log when a log lacks it) and continues at the fitted rate"
+            ),
+            WearModel::Archard => format!(
+                "Archard wear: the clearance grows by k·W(c) per cycle (metadata {HEAD_CYCLES_KEY}), W(c) = ∫F_N·|v_slip| dt per cycle simulated at the latest log's speed with its calibrated parameters ({} revolutions per clearance); k stays as fitted",
+                opts.work_revs
+            ),
+        },
         "the forecast interval is Fieller's, from the fit's uncertainty only (Student t, ν = n − 2); it does not include a change of the line's use".into(),
         "days are counted at the cycle rate seen over the history (first to last log)".into(),
     ];
@@ -362,12 +379,40 @@ fn head_trend(rig: String, mut points: Vec<HistoryPoint>, opts: &TrendOptions) -
         ));
     }
     let cycles_per_day = history::cycles_per_day(&points);
-    let fit = if abscissa.is_some() {
-        let y: Vec<f64> = points.iter().map(|p| p.clearance_mm).collect();
-        let s: Vec<f64> = points.iter().map(|p| p.weight_sigma_mm()).collect();
-        fit_line(&x, &y, &s).map_err(|e| e.0)
-    } else {
-        Err("no abscissa".into())
+    let y: Vec<f64> = points.iter().map(|p| p.clearance_mm).collect();
+    let s: Vec<f64> = points.iter().map(|p| p.weight_sigma_mm()).collect();
+    // Archard: the sliding work per cycle W(c), simulated at the latest
+    // log's speed with its calibrated parameters; the line is fitted to G(c).
+    let mut work: Option<WearWork> = None;
+    let fit = match (abscissa, opts.model) {
+        (None, _) => Err("no abscissa".into()),
+        (Some(history::Abscissa::Days), WearModel::Archard) => Err(format!(
+            "the Archard model counts wear per cycle: every log needs the head's cycle counter (metadata {HEAD_CYCLES_KEY})"
+        )),
+        (Some(_), WearModel::Archard) => match points.last() {
+            None => Err("no log".into()),
+            Some(last) => {
+                let w = work_ladder(
+                    &last.params,
+                    last.motor_rpm,
+                    &opts.ladder_mm,
+                    opts.work_revs,
+                );
+                if w.is_usable() {
+                    let g: Vec<f64> = y.iter().map(|c| w.g(*c)).collect();
+                    let sg: Vec<f64> = y.iter().zip(&s).map(|(c, s)| s / w.work_at(*c)).collect();
+                    let f = fit_line(&x, &g, &sg).map_err(|e| e.0);
+                    work = Some(w);
+                    f
+                } else {
+                    Err(format!(
+                        "the model gave no sliding work at 2 or more clearances ({})",
+                        w.notes.join("; ")
+                    ))
+                }
+            }
+        },
+        (Some(_), WearModel::Linear) => fit_line(&x, &y, &s).map_err(|e| e.0),
     };
     let limit = match (opts.limit_mm, opts.tolerance_mm, points.last()) {
         (Some(l), _, _) => Some(ClearanceLimit::user(l)),
@@ -388,18 +433,49 @@ fn head_trend(rig: String, mut points: Vec<HistoryPoint>, opts: &TrendOptions) -
         Some(history::Abscissa::Days) => Some(1.0),
         _ => cycles_per_day,
     };
+    let archard = match (&fit, work) {
+        (Ok(f), Some(w)) => {
+            let (lo, hi) = y
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), c| {
+                    (a.min(*c), b.max(*c))
+                });
+            Some(ArchardFit::of(w, f, x_last, lo, hi))
+        }
+        _ => None,
+    };
     let forecast = match (&fit, limit.as_ref().and_then(|l| l.limit_mm)) {
-        (Ok(f), Some(l)) => forecast(f, l, x_last, opts.level, per_day),
+        (Ok(f), Some(l)) => match &archard {
+            // The crossing of G(L) by the line in G, reported in mm.
+            Some(a) => forecast(f, a.work.g(l), x_last, opts.level, per_day).map(|mut fc| {
+                fc.limit_mm = l;
+                fc
+            }),
+            None => forecast(f, l, x_last, opts.level, per_day),
+        },
         (Err(e), _) => Err(format!("no fit ({e})")),
         (_, None) => Err("no clearance limit".into()),
     };
-    let verdict = verdict(&fit, &forecast, abscissa);
+    let rate = match (&archard, &fit) {
+        (Some(a), _) => format!(
+            "wear now {:.3e} mm per cycle (Archard k {:.3e} mm/J)",
+            a.rate_now, a.k_mm_per_j
+        ),
+        (None, Ok(f)) => format!(
+            "wearing at {:.3e} mm per {}",
+            f.slope,
+            abscissa.map_or("", |a| a.unit()).trim_end_matches('s')
+        ),
+        _ => String::new(),
+    };
+    let verdict = verdict(&fit, &forecast, abscissa, &rate);
     HeadTrend {
         rig,
         points,
         abscissa,
         x,
         fit,
+        archard,
         cycles_per_day,
         limit,
         forecast,
@@ -412,15 +488,14 @@ fn verdict(
     fit: &Result<crate::wear::LineFit, String>,
     fc: &Result<crate::wear::Forecast, String>,
     abscissa: Option<history::Abscissa>,
+    rate: &str,
 ) -> String {
     let unit = abscissa.map_or("", |a| a.unit());
     match (fit, fc) {
         (Err(e), _) => format!("the data cannot support a trend: {e}"),
-        (Ok(f), _) if f.slope_lo95 <= 0.0 => format!(
-            "no wear the data can show: rate {:.3e} mm per {} (95 % interval includes 0)",
-            f.slope,
-            unit.trim_end_matches('s')
-        ),
+        (Ok(f), _) if f.slope_lo95 <= 0.0 => {
+            format!("no wear the data can show: {rate} (95 % interval of the rate includes 0)")
+        }
         (Ok(_), Ok(f)) if f.reached => format!(
             "the limit {:.3} mm is reached: change the connecting rod",
             f.limit_mm
@@ -435,18 +510,24 @@ fn verdict(
                 f.limit_mm, f.remaining
             ),
         },
-        (Ok(f), Err(e)) => format!(
-            "wearing at {:.3e} mm per {}; {e}",
-            f.slope,
-            unit.trim_end_matches('s')
-        ),
+        (Ok(_), Err(e)) => format!("{rate}; {e}"),
     }
 }
 
+/// The calibrations the session's trend has made in this process, by the
+/// log's SHA-256: a re-run of the Trend pane (`r`, a revisit, another batch
+/// step) calibrates only logs it has not seen (always with the default
+/// options, so one memo serves every call).
+static SESSION_CACHE: std::sync::Mutex<TrendCache> = std::sync::Mutex::new(TrendCache {
+    version: CACHE_VERSION,
+    entries: BTreeMap::new(),
+});
+
 /// The trend of the session's logs (the Trend pane, `render trend`, batch
-/// `run trend`): the logs' files with the default options, no cache, the
-/// limit derived from the first side-view recipe's `height_tol_mm` when one
-/// is loaded — what `pinsight trend LOGS -r SIDE_RECIPE --json` prints.
+/// `run trend`): the logs' files with the default options, the limit
+/// derived from the first side-view recipe's `height_tol_mm` when one is
+/// loaded — what `pinsight trend LOGS -r SIDE_RECIPE --json` prints. The
+/// calibrations are kept for the process ([`SESSION_CACHE`]).
 pub fn trend_session(
     logs: &[super::entries::LogEntry],
     recipes: &[super::entries::RecipeEntry],
@@ -462,12 +543,19 @@ pub fn trend_session(
             .find_map(|r| r.recipe.tolerance.height_tol_mm),
         ..TrendOptions::default()
     };
-    Ok(run_trend(
-        &inputs,
-        &opts,
-        &mut TrendCache::default(),
-        progress,
-    ))
+    // The memo is taken out while the trend runs (a poisoned lock, after a
+    // panic elsewhere, is an empty memo).
+    let mut cache = match SESSION_CACHE.lock() {
+        Ok(mut c) => std::mem::take(&mut *c),
+        Err(_) => TrendCache::default(),
+    };
+    let r = run_trend(&inputs, &opts, &mut cache, progress);
+    if let Ok(mut c) = SESSION_CACHE.lock() {
+        // Another call may have filled the memo meanwhile: keep both.
+        c.entries.append(&mut cache.entries);
+        c.version = CACHE_VERSION;
+    }
+    Ok(r)
 }
 
 #[cfg(test)]

@@ -62,6 +62,10 @@ pub struct Outputs {
     /// Contact normal force (N) and friction (N, on the pin bar along t).
     pub f_n: f64,
     pub f_t: f64,
+    /// Tangential slip speed at the contact point (m/s), v_t of model.md:
+    /// (v_P − v_B)·t − ω3·R_B, whether or not in contact (Archard wear
+    /// integrates F_N·|v_t|).
+    pub v_slip: f64,
     /// Drive torque (N·m).
     pub m12: f64,
     /// Penetration δ = e − c (m) and its rate (m/s).
@@ -255,15 +259,14 @@ impl ClearanceModel {
         } else {
             ([1.0, 0.0], norm2(dv[0], dv[1]))
         };
+        let tt = [-n[1], n[0]];
+        let v_t = dv[0] * tt[0] + dv[1] * tt[1] - omega3 * self.rb;
         let (f_n, f_t) = if mode.in_contact && delta > 0.0 {
             let f_n = self.law.normal_force(delta, delta_dot, mode.approach);
-            let tt = [-n[1], n[0]];
-            let v_t = dv[0] * tt[0] + dv[1] * tt[1] - omega3 * self.rb;
             (f_n, coulomb(self.c_f, f_n, v_t, self.v0, self.v1))
         } else {
             (0.0, 0.0)
         };
-        let tt = [-n[1], n[0]];
         // Contact force on the rod: normal along +n, friction opposite to the pin bar's.
         let f_rod = [f_n * n[0] - f_t * tt[0], f_n * n[1] - f_t * tt[1]];
         // Rod: moments about A.
@@ -318,6 +321,7 @@ impl ClearanceModel {
             alpha3,
             f_n,
             f_t,
+            v_slip: v_t,
             m12,
             delta,
             delta_dot,

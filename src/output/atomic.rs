@@ -200,6 +200,24 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     sync_dir(&dir)
 }
 
+/// Publishes one file of a stream read as it appears (camera photographs,
+/// `rig-sim --images`): a hidden temporary renamed into place, so a reader
+/// sees it whole or not at all; not fsynced (many small files; a power loss
+/// may lose the last ones). The folder must exist.
+pub fn publish_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let (dir, name) = split(path)?;
+    let tmp = temp_path(&dir, &name);
+    let r = OpenOptions::new().write(true).create_new(true).open(&tmp);
+    if let Err(e) = r.and_then(|mut f| f.write_all(bytes)) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(stage_error(path, &dir, bytes.len() as u64, e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        OutputError::io(path, e)
+    })
+}
+
 /// How a [`Report`] reaches its folder.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CommitMode {

@@ -1,5 +1,7 @@
 //! The overlay report's own forms: the CSV tables, the PNG charts and the
-//! text summary, and writing them all into a folder. Every face that writes
+//! text summary, and writing them all into a folder; the calibration
+//! report's text summary ([`calibration_text`]; its JSON is the report
+//! itself, its parameter file `params_toml`). Every face that writes
 //! an overlay (the command line, batch exports, examples) goes through here.
 //!
 //! Files written by [`write_outputs`]:
@@ -12,6 +14,7 @@
 //! - `overlay_stroke.png`, `overlay_force.png`: measured vs predicted with
 //!   the residual beneath.
 
+use super::calibrate::CalibrationReport;
 use super::compare::OverlayReport;
 use crate::plot::{self, LineChart, Panel, Series, SeriesStyle};
 use anyhow::anyhow;
@@ -383,6 +386,55 @@ pub fn summary_text(r: &OverlayReport, out: Option<&Path>) -> String {
             "  wrote {}/{{overlay.json, cycles.csv, run.csv, figures.csv, curves.csv, overlay_stroke.png, overlay_force.png}}",
             d.display()
         );
+    }
+    s
+}
+
+/// The calibration report's text summary (what `pinsight calibrate`
+/// prints): each estimate with its σ and U95, the F_ins table, the residual
+/// before and after, the notes.
+pub fn calibration_text(r: &CalibrationReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "calibrate {}: {} cycles at {:.1} rpm",
+        r.file, r.cycles, r.motor_rpm
+    );
+    let _ = writeln!(
+        s,
+        "  {:<14} {:>10} {:>12} {:>10} {:>10}  unit",
+        "estimate", "nominal", "value", "σ", "U95"
+    );
+    for e in &r.estimates {
+        let _ = writeln!(
+            s,
+            "  {:<14} {:>10} {:>12.5} {:>10.5} {:>10.5}  {}",
+            e.name,
+            e.nominal.map_or("-".to_string(), |v| format!("{v:.4}")),
+            e.value,
+            e.sigma,
+            e.u95,
+            e.unit
+        );
+    }
+    if !r.f_ins_table.is_empty() {
+        let _ = writeln!(s, "  F_ins table (depth mm → N ± σ):");
+        for (d, f, sg) in &r.f_ins_table {
+            let _ = writeln!(s, "    {d:>6.3} → {f:>8.3} ± {sg:.3}");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "  residual before: stroke spread {:.4} mm, stroke mean {:.4} mm, force {:.3} N",
+        r.before.stroke_spread_rms_mm, r.before.stroke_mean_rms_mm, r.before.force_rms_n
+    );
+    let _ = writeln!(
+        s,
+        "  residual after:  stroke spread {:.4} mm, stroke mean {:.4} mm, force {:.3} N",
+        r.after.stroke_spread_rms_mm, r.after.stroke_mean_rms_mm, r.after.force_rms_n
+    );
+    for n in &r.notes {
+        let _ = writeln!(s, "  note: {n}");
     }
     s
 }

@@ -114,18 +114,14 @@ pub struct LineView {
 impl LineView {
     /// One row per cycle of the log shown.
     pub fn to_csv(&self) -> String {
-        let rows: Vec<Vec<String>> = self
-            .cycles
-            .iter()
-            .map(|c| {
-                vec![
-                    c.index.to_string(),
-                    c.status.to_string(),
-                    c.reasons.join("; "),
-                ]
-            })
-            .collect();
-        super::csv_table(&["cycle", "status", "reasons"], &rows)
+        let row = |c: &CycleRow| {
+            vec![
+                c.index.to_string(),
+                c.status.to_string(),
+                c.reasons.join("; "),
+            ]
+        };
+        super::csv_table(&["cycle", "status", "reasons"], self.cycles.iter().map(row))
     }
 }
 

@@ -22,6 +22,8 @@
 pub mod chart;
 pub mod demo;
 pub mod line;
+pub mod live;
+pub mod live_state;
 pub mod methods;
 pub mod model;
 pub mod overlay;
@@ -131,6 +133,10 @@ pub struct PaneState {
     pub methods: methods::MethodsUi,
     pub line: line::LineUi,
     pub trend: trend::TrendUi,
+    /// Live mode: the views follow the newest data (Signals' window slides,
+    /// Vision shows the latest connector). `F` toggles it, scrolling back
+    /// pauses it, `End`/`G` resumes it.
+    pub follow: bool,
 }
 
 impl PaneState {
@@ -148,6 +154,7 @@ impl PaneState {
             methods: Default::default(),
             line: Default::default(),
             trend: Default::default(),
+            follow: true,
         }
     }
 
@@ -194,6 +201,7 @@ pub const UI_OPTIONS: &[&str] = &[
     "signals.channel",
     "overlay.cycle",
     "overlay.log",
+    "overlay.calibrate",
     "model.selected",
     "study.factor",
     "study.quantity",
@@ -212,6 +220,14 @@ pub(crate) fn parse_f64(v: &str) -> Result<f64, String> {
         .ok()
         .filter(|x| x.is_finite())
         .ok_or_else(|| format!("`{v}` is not a number"))
+}
+
+pub(crate) fn parse_bool(v: &str) -> Result<bool, String> {
+    match v.trim().to_ascii_lowercase().as_str() {
+        "yes" | "true" | "on" | "1" => Ok(true),
+        "no" | "false" | "off" | "0" => Ok(false),
+        _ => Err(format!("`{v}` is not yes or no")),
+    }
 }
 
 pub(crate) fn parse_usize(v: &str) -> Result<usize, String> {
@@ -318,15 +334,23 @@ pub(crate) fn csv_field(s: &str) -> String {
 }
 
 /// A CSV document from a header and rows.
-pub(crate) fn csv_table(header: &[&str], rows: &[Vec<String>]) -> String {
+pub(crate) fn csv_table<R: AsRef<[String]>>(
+    header: &[&str],
+    rows: impl IntoIterator<Item = R>,
+) -> String {
     let mut out = header.join(",");
     out.push('\n');
     for r in rows {
-        let line: Vec<String> = r.iter().map(|f| csv_field(f)).collect();
+        let line: Vec<String> = r.as_ref().iter().map(|f| csv_field(f)).collect();
         out.push_str(&line.join(","));
         out.push('\n');
     }
     out
+}
+
+/// A number for CSV cells: empty for None, else `{:.prec$}`.
+pub(crate) fn csv_num(x: Option<f64>, prec: usize) -> String {
+    x.map(|v| format!("{v:.prec$}")).unwrap_or_default()
 }
 
 /// A number for tables: empty for NaN/None, else `{:.prec$}`.

@@ -11,17 +11,27 @@
 //! (or the measured envelope of all cycles); the residual (measured −
 //! predicted mean) beneath. Without a log the pane shows the model's
 //! prediction alone and says so.
+//!
+//! On request (key `C`, `--ui overlay.calibrate=yes`, batch `run
+//! calibrate`) the log is calibrated against the model
+//! ([`crate::engine::calibrate`]): the pane adds the fitted clearance,
+//! standoff, lags and zeros with their U95 and the residual before → after.
 
 use super::chart::{ChartView, SeriesKind, SeriesView, decimate_points};
 use super::session::Session;
-use super::{PaneState, csv_table, parse_usize};
+use super::{PaneState, csv_num, csv_table, parse_bool, parse_usize};
+use crate::overlay::calibrate::{CalibrationReport, Residuals};
 use serde::Serialize;
+use std::sync::Arc;
 
-/// UI state: which log and which cycle (None = envelope of all cycles).
+/// UI state: which log and which cycle (None = envelope of all cycles);
+/// whether the log's calibration is asked for (headless faces run it
+/// first, as the TUI does on its key `C`).
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct OverlayUi {
     pub log: usize,
     pub cycle: Option<usize>,
+    pub calibrate: bool,
 }
 
 impl OverlayUi {
@@ -35,6 +45,7 @@ impl OverlayUi {
                 }
             }
             "log" => self.log = parse_usize(v)?,
+            "calibrate" => self.calibrate = parse_bool(v)?,
             _ => return Err(format!("no option `{k}`")),
         }
         Ok(())
@@ -80,6 +91,34 @@ pub struct OverlayView {
     /// (JSON only; shared, not copied, per frame).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub report: Option<std::sync::Arc<crate::overlay::compare::OverlayReport>>,
+    /// The log's calibration against the model, once run (key `C`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationView>,
+}
+
+/// The calibration of the Overlay pane's log
+/// ([`crate::engine::calibrate::run_calibration`]): the fitted estimates
+/// with their U95, the residual before and after.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct CalibrationView {
+    /// What is drawn: (label, text), e.g. ("clearance", "0.1002 ± 0.0054 mm").
+    pub rows: Vec<(String, String)>,
+    pub clearance_mm: Option<f64>,
+    pub clearance_u95_mm: Option<f64>,
+    pub standoff_mm: Option<f64>,
+    pub standoff_u95_mm: Option<f64>,
+    pub laser_lag_us: Option<f64>,
+    pub force_lag_us: Option<f64>,
+    pub before: Option<Residuals>,
+    pub after: Option<Residuals>,
+    /// Why the calibration failed (the same words as `pinsight calibrate`).
+    pub error: Option<String>,
+    /// Time the calibration took (JSON only: not drawn).
+    pub wall_ms: Option<f64>,
+    /// The job's whole result, exactly as `pinsight calibrate --json`
+    /// prints it (JSON only; shared, not copied, per frame).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub report: Option<Arc<CalibrationReport>>,
 }
 
 impl OverlayView {
@@ -91,21 +130,17 @@ impl OverlayView {
     }
 
     pub fn to_csv(&self) -> String {
-        let f = |x: Option<f64>| x.map(|v| format!("{v:.6}")).unwrap_or_default();
-        let rows: Vec<Vec<String>> = self
-            .cycles
-            .iter()
-            .map(|c| {
-                vec![
-                    c.index.to_string(),
-                    f(c.stroke_rms_mm),
-                    f(c.force_rms_n),
-                    f(c.stroke_max_mm),
-                    f(c.force_max_n),
-                    c.note.clone(),
-                ]
-            })
-            .collect();
+        let f = |x: Option<f64>| csv_num(x, 6);
+        let row = |c: &CycleRow| {
+            vec![
+                c.index.to_string(),
+                f(c.stroke_rms_mm),
+                f(c.force_rms_n),
+                f(c.stroke_max_mm),
+                f(c.force_max_n),
+                c.note.clone(),
+            ]
+        };
         csv_table(
             &[
                 "cycle",
@@ -115,16 +150,93 @@ impl OverlayView {
                 "force_max_abs_n",
                 "note",
             ],
-            &rows,
+            self.cycles.iter().map(row),
         )
     }
 }
 
 pub fn view(s: &Session, ui: &PaneState) -> OverlayView {
     if !s.logs.is_empty() {
-        return measured_view(s, ui);
+        let mut v = measured_view(s, ui);
+        let li = ui.overlay.log.min(s.logs.len() - 1);
+        v.calibration = s.calibration_of(li).map(calibration_view);
+        return v;
     }
     prediction_view(s, ui)
+}
+
+/// A value with its expanded uncertainty, to two significant digits of
+/// the uncertainty.
+fn with_u95(value: f64, u95: f64, unit: &str) -> String {
+    let decimals = if u95.is_finite() && u95 > 0.0 {
+        (1 - u95.log10().floor() as i32).clamp(0, 8) as usize
+    } else {
+        4
+    };
+    format!("{value:.decimals$} ± {u95:.decimals$} {unit}")
+}
+
+fn calibration_view(run: &crate::engine::calibrate::CalibrationRun) -> CalibrationView {
+    let mut v = CalibrationView {
+        wall_ms: Some(run.wall_ms),
+        ..Default::default()
+    };
+    let r = match &run.report {
+        Ok(r) => r,
+        Err(e) => {
+            v.error = Some(e.clone());
+            return v;
+        }
+    };
+    v.rows.push((
+        "calibrated on".into(),
+        format!("{} cycles at {:.0} rpm", r.cycles, r.motor_rpm),
+    ));
+    for e in &r.estimates {
+        let unit = if e.unit == "us" {
+            "µs"
+        } else {
+            e.unit.as_str()
+        };
+        let mut text = with_u95(e.value, e.u95, unit);
+        if let Some(n) = e.nominal {
+            text.push_str(&format!(" (was {n})"));
+        }
+        v.rows.push((e.name.replace('_', " "), text));
+        let (value, u95) = (Some(e.value), Some(e.u95));
+        match e.name.as_str() {
+            "clearance" => (v.clearance_mm, v.clearance_u95_mm) = (value, u95),
+            "standoff" => (v.standoff_mm, v.standoff_u95_mm) = (value, u95),
+            "laser_lag" => v.laser_lag_us = value,
+            "force_lag" => v.force_lag_us = value,
+            _ => {}
+        }
+    }
+    let (b, a) = (&r.before, &r.after);
+    v.rows.extend([
+        (
+            "stroke mean RMS".into(),
+            format!(
+                "{:.4} → {:.4} mm",
+                b.stroke_mean_rms_mm, a.stroke_mean_rms_mm
+            ),
+        ),
+        (
+            "stroke spread RMS".into(),
+            format!(
+                "{:.4} → {:.4} mm",
+                b.stroke_spread_rms_mm, a.stroke_spread_rms_mm
+            ),
+        ),
+        (
+            "force RMS".into(),
+            format!("{:.3} → {:.3} N", b.force_rms_n, a.force_rms_n),
+        ),
+    ]);
+    v.before = Some(*b);
+    v.after = Some(*a);
+    v.report = Some(r.clone());
+    v
 }
 
 /// Points of a grid curve (degrees) decimated to the chart's columns.

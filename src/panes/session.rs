@@ -5,10 +5,12 @@
 //! ([`crate::engine`]): [`load_path`] turns paths into [`Loaded`] items that
 //! [`Session::absorb`] merges (the TUI loads on its worker thread and
 //! absorbs on the UI thread; batch mode and `render` call both in a row);
-//! the jobs ([`run_model`], [`run_study`], [`run_yield`], [`run_overlay`] …)
+//! the jobs ([`run_model`], [`run_study`], [`run_yield`], [`run_overlay`],
+//! [`run_calibration`] …)
 //! return results that enter through the `set_*` methods, so every pane
 //! stays a pure function of the session.
 
+pub use crate::engine::calibrate::{CalibrationRun, run_calibration};
 pub use crate::engine::entries::{
     FINDING_SEP, FileEntry, FileKind, FileStatus, ImageEntry, ImageSource, Loaded, LogEntry,
     RecipeEntry,
@@ -60,6 +62,9 @@ pub struct Session {
     pub yields: Option<YieldRun>,
     /// Measured-vs-predicted comparisons by log index.
     pub overlays: std::collections::BTreeMap<usize, OverlayRun>,
+    /// Calibrations against the model by log index (run on demand: the
+    /// Overlay pane's key `C`, batch `run calibrate`).
+    pub calibrations: std::collections::BTreeMap<usize, CalibrationRun>,
     /// Process recipes (evaluation objects per part number).
     pub process_recipes: Vec<crate::process::ProcessRecipe>,
     /// The process monitor over the logs (None: not run, or inputs changed
@@ -69,6 +74,8 @@ pub struct Session {
     /// The wear trend over the logs (None: not run, or the logs or recipes
     /// changed since), or why it could not run.
     pub trend: Option<Result<std::sync::Arc<crate::wear::TrendReport>, String>>,
+    /// The live line being followed (`tui --follow`, `demo --live`).
+    pub live: Option<super::live_state::LiveState>,
 }
 
 impl Default for Session {
@@ -100,9 +107,11 @@ impl Session {
             inspections: Default::default(),
             yields: None,
             overlays: Default::default(),
+            calibrations: Default::default(),
             process_recipes: Vec::new(),
             monitor: None,
             trend: None,
+            live: None,
         }
     }
 
@@ -244,9 +253,19 @@ impl Session {
             }
             PaneId::Overlay if !self.logs.is_empty() => {
                 let i = ui.overlay.log.min(self.logs.len() - 1);
+                let mut ran = Vec::new();
                 if self.overlay_of(i).is_none() {
                     self.run_overlay_now(i);
-                    return Some(format!("overlay of log {i}"));
+                    ran.push(format!("overlay of log {i}"));
+                }
+                // The calibration is asked for (`overlay.calibrate=yes`):
+                // the TUI runs it on its key.
+                if ui.overlay.calibrate && self.calibration_of(i).is_none() {
+                    self.run_calibration_with(i, &Progress::hidden());
+                    ran.push(format!("calibration of log {i}"));
+                }
+                if !ran.is_empty() {
+                    return Some(ran.join(", "));
                 }
             }
             PaneId::Line
@@ -352,16 +371,49 @@ impl Session {
         self.monitor = Some(r.map(std::sync::Arc::new));
     }
 
+    pub fn set_calibration(&mut self, r: CalibrationRun) {
+        self.calibrations.insert(r.log, r);
+    }
+
+    /// The calibration of log `i`, if it ran.
+    pub fn calibration_of(&self, i: usize) -> Option<&CalibrationRun> {
+        self.calibrations.get(&i)
+    }
+
+    /// Calibrates log `i` now against the model, reporting to (and stopped
+    /// by) `progress`.
+    pub fn run_calibration_with(&mut self, i: usize, progress: &Progress) {
+        let r = match self.rig_of(i) {
+            Some(Ok((log, cycles))) => run_calibration(i, log, cycles, progress),
+            Some(Err(e)) => CalibrationRun {
+                log: i,
+                report: Err(e),
+                wall_ms: 0.0,
+            },
+            None => return,
+        };
+        self.set_calibration(r);
+    }
+
+    /// Log `i`'s rig data and cycles, or why it has none (None: no log `i`).
+    fn rig_of(
+        &self,
+        i: usize,
+    ) -> Option<Result<(&crate::rig::RigLog, &crate::rig::cycles::CycleSet), String>> {
+        let l = self.logs.get(i)?;
+        Some(match &l.rig {
+            Some((log, cycles)) => Ok((log, cycles)),
+            None => Err(format!("{}: not a rig log (no cycles to compare)", l.path)),
+        })
+    }
+
     /// Runs the overlay of log `i` now.
     pub fn run_overlay_now(&mut self, i: usize) {
-        let r = match self.logs.get(i) {
-            Some(LogEntry {
-                rig: Some((log, cycles)),
-                ..
-            }) => run_overlay(i, log, cycles, &Progress::hidden()),
-            Some(l) => OverlayRun {
+        let r = match self.rig_of(i) {
+            Some(Ok((log, cycles))) => run_overlay(i, log, cycles, &Progress::hidden()),
+            Some(Err(e)) => OverlayRun {
                 log: i,
-                report: Err(format!("{}: not a rig log (no cycles to compare)", l.path)),
+                report: Err(e),
                 wall_ms: 0.0,
             },
             None => return,

@@ -62,6 +62,21 @@ pub struct SessionView {
     pub model_status: String,
     /// Colours and image protocol of the display.
     pub display: Option<String>,
+    /// The live line: counts, raised alarms, recent events (newest first).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub live: Option<LiveView>,
+}
+
+/// The live line on the Session pane.
+#[derive(Debug, Clone, Serialize)]
+pub struct LiveView {
+    pub status: String,
+    pub following: bool,
+    /// Alarm rules raised now.
+    pub alarms: Vec<String>,
+    pub last_alarm: Option<String>,
+    /// Recent events, newest first (NOK cycles, failed connectors, alarms, findings, files).
+    pub events: Vec<String>,
 }
 
 impl SessionView {
@@ -172,5 +187,12 @@ pub fn view(s: &Session, ui: &PaneState) -> SessionView {
             .collect(),
         model_status,
         display: s.display.clone(),
+        live: s.live.as_ref().map(|l| LiveView {
+            status: l.status(s.yields.as_ref().and_then(|y| y.report.yield_frac)),
+            following: ui.follow,
+            alarms: l.active_alarms.iter().map(|a| a.to_string()).collect(),
+            last_alarm: l.last_alarm.clone(),
+            events: l.lines.iter().rev().take(50).cloned().collect(),
+        }),
     }
 }

@@ -77,6 +77,82 @@ impl TrendView {
     }
 }
 
+/// Short numbers for a narrow column.
+fn sci(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.2e}")
+    } else {
+        "–".into()
+    }
+}
+
+/// The wear rate, the fit's quality, the limit and the forecast in short
+/// lines (each fits a 38-column box at 80×24; the report's sentences are
+/// in `trend.md` and the JSON).
+fn compact_facts(h: &crate::wear::HeadTrend) -> Vec<String> {
+    let unit = h.abscissa.map_or("", |a| a.unit()).trim_end_matches('s');
+    let mut out = Vec::new();
+    match (&h.fit, &h.archard) {
+        (Ok(f), Some(a)) => {
+            out.push(format!(
+                "wear {} [{}, {}] mm/{unit}",
+                sci(a.rate_now),
+                sci(a.rate_now_lo95),
+                sci(a.rate_now_hi95)
+            ));
+            out.push(format!(
+                "Archard k {} mm/J, R² {:.3}, χ²/ν {:.2}",
+                sci(a.k_mm_per_j),
+                f.r2,
+                f.chi2_red
+            ));
+        }
+        (Ok(f), None) => {
+            out.push(format!(
+                "wear {} [{}, {}] mm/{unit}",
+                sci(f.slope),
+                sci(f.slope_lo95),
+                sci(f.slope_hi95)
+            ));
+            out.push(format!(
+                "R² {:.3}, χ²/ν {:.2} (ν = {}), 95 %",
+                f.r2, f.chi2_red, f.dof
+            ));
+        }
+        (Err(e), _) => out.push(format!("no fit: {e}")),
+    }
+    if let Some(l) = &h.limit {
+        out.push(match (l.limit_mm, l.tolerance_mm) {
+            (Some(x), Some(t)) => format!("limit {x:.3} mm (model, ±{t} mm)"),
+            (Some(x), None) => format!("limit {x:.3} mm (given)"),
+            (None, _) => "no limit within the ladder".into(),
+        });
+    }
+    match &h.forecast {
+        Ok(f) if f.reached => out.push("limit reached at the last log".into()),
+        Ok(f) => {
+            match f.days {
+                Some(d) => out.push(format!("in {} {unit}s ≈ {d:.1} d", sci(f.remaining))),
+                None => out.push(format!("in {} {unit}s", sci(f.remaining))),
+            }
+            let pct = f.level * 100.0;
+            match (f.days_lo, f.days_hi, f.days) {
+                (Some(lo), hi, Some(_)) => out.push(format!(
+                    "  {pct:.0} % [{lo:.1}, {}] days",
+                    hi.map_or("∞".into(), |h| format!("{h:.1}"))
+                )),
+                _ => out.push(format!(
+                    "  {pct:.0} % [{}, {}]",
+                    sci(f.remaining_lo),
+                    f.remaining_hi.map_or("∞".into(), sci)
+                )),
+            }
+        }
+        Err(e) => out.push(format!("no forecast: {e}")),
+    }
+    out
+}
+
 fn empty(message: String, pending: bool) -> TrendView {
     TrendView {
         heads: Vec::new(),
@@ -115,10 +191,16 @@ pub fn view(s: &Session, ui: &PaneState) -> TrendView {
     let mut v = empty(String::new(), false);
     v.message = None;
     v.report = Some(Arc::clone(rep));
+    // The file's name (not its folder) and why: one line at 80 columns.
     v.left_out = rep
         .errors
         .iter()
-        .map(|e| format!("{}: {}", e.file, e.error))
+        .map(|e| {
+            let name = std::path::Path::new(&e.file)
+                .file_name()
+                .map_or(e.file.clone(), |n| n.to_string_lossy().into_owned());
+            format!("left out {name}: {}", e.error)
+        })
         .collect();
     v.heads = rep.heads.iter().map(|h| h.rig.clone()).collect();
     let Some(h) = rep
@@ -131,26 +213,7 @@ pub fn view(s: &Session, ui: &PaneState) -> TrendView {
     v.head = ui.trend.head.min(rep.heads.len() - 1);
     v.rig = Some(h.rig.clone());
     v.verdict = Some(h.verdict.clone());
-    let unit = h.abscissa.map_or("", |a| a.unit());
-    match &h.fit {
-        Ok(f) => v.facts.push(format!(
-            "wear {:.3e} mm/{} [{:.3e}, {:.3e}] 95 %, R² {:.3}, χ²/ν {:.2}",
-            f.slope,
-            unit.trim_end_matches('s'),
-            f.slope_lo95,
-            f.slope_hi95,
-            f.r2,
-            f.chi2_red
-        )),
-        Err(e) => v.facts.push(format!("no fit: {e}")),
-    }
-    if let Some(l) = &h.limit {
-        v.facts.push(match l.limit_mm {
-            Some(x) => format!("limit {x:.3} mm ({:?})", l.source).to_lowercase(),
-            None => "no limit within the ladder".into(),
-        });
-    }
-    v.facts.push(h.forecast_text());
+    v.facts.extend(compact_facts(h));
     v.days_to_limit = h.forecast.as_ref().ok().and_then(|f| f.days);
     v.history = h
         .points

@@ -2,7 +2,7 @@
 //! coloured by verdict, a per-pin table, next/previous image.
 
 use super::session::Session;
-use super::{PaneState, csv_table, parse_usize};
+use super::{PaneState, csv_num, csv_table, parse_usize};
 use crate::vision::batch::ItemStatus;
 use serde::Serialize;
 use std::sync::Arc;
@@ -81,25 +81,21 @@ pub struct VisionView {
 
 impl VisionView {
     pub fn to_csv(&self) -> String {
-        let f = |x: Option<f64>| x.map(|v| format!("{v:.4}")).unwrap_or_default();
-        let rows: Vec<Vec<String>> = self
-            .pins
-            .iter()
-            .map(|p| {
-                vec![
-                    p.row.to_string(),
-                    p.col.to_string(),
-                    p.status.clone(),
-                    f(p.x_px),
-                    f(p.y_px),
-                    f(p.dx_mm),
-                    f(p.dy_mm),
-                    f(p.offset_mm),
-                    f(p.area_ratio),
-                    f(p.height_mm),
-                ]
-            })
-            .collect();
+        let f = |x: Option<f64>| csv_num(x, 4);
+        let row = |p: &PinRow| {
+            vec![
+                p.row.to_string(),
+                p.col.to_string(),
+                p.status.clone(),
+                f(p.x_px),
+                f(p.y_px),
+                f(p.dx_mm),
+                f(p.dy_mm),
+                f(p.offset_mm),
+                f(p.area_ratio),
+                f(p.height_mm),
+            ]
+        };
         csv_table(
             &[
                 "row",
@@ -113,7 +109,7 @@ impl VisionView {
                 "area_ratio",
                 "height_mm",
             ],
-            &rows,
+            self.pins.iter().map(row),
         )
     }
 }

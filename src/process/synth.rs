@@ -70,10 +70,10 @@ pub struct LineTruth {
 }
 
 /// The foxglove.CompressedImage JSON schema of the camera topic.
-const IMAGE_SCHEMA: &str = r#"{"title": "foxglove.CompressedImage", "type": "object", "properties": {"timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}}, "frame_id": {"type": "string"}, "format": {"type": "string"}, "data": {"type": "string", "contentEncoding": "base64"}}}"#;
+pub const IMAGE_SCHEMA: &str = r#"{"title": "foxglove.CompressedImage", "type": "object", "properties": {"timestamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}}, "frame_id": {"type": "string"}, "format": {"type": "string"}, "data": {"type": "string", "contentEncoding": "base64"}}}"#;
 
 /// Renders the connector of one cycle.
-fn connector_scene(recipe: &Recipe, d: &CycleDraw, debris: bool, seed: u64) -> Scene {
+pub fn connector_scene(recipe: &Recipe, d: &CycleDraw, debris: bool, seed: u64) -> Scene {
     let mut rng = SceneRng::new(seed);
     let mut sc = Scene::nominal(recipe, recipe.mm_per_px.unwrap_or(0.025));
     sc.seed = seed;
@@ -123,7 +123,8 @@ fn connector_scene(recipe: &Recipe, d: &CycleDraw, debris: bool, seed: u64) -> S
     sc
 }
 
-fn png_of(g: &crate::vision::Gray) -> Vec<u8> {
+/// A rendered image as PNG bytes.
+pub fn png_of(g: &crate::vision::Gray) -> Vec<u8> {
     let img = match &g.data {
         GrayData::U8(d) => image::DynamicImage::ImageLuma8(
             image::GrayImage::from_raw(g.width, g.height, d.clone()).unwrap_or_default(),

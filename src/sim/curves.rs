@@ -25,6 +25,11 @@ pub struct Curves {
     pub ideal_acc_mps2: Vec<f64>,
     pub ideal_torque_nm: Vec<f64>,
     pub process_force_n: Vec<f64>,
+    /// Tangential slip speed at the clearance joint's contact point (m/s;
+    /// NaN at the deterministic levels). Not a CSV column: the Archard wear
+    /// model (`wear::archard`) integrates contact_force_n·|slip_mps|.
+    #[serde(default)]
+    pub slip_mps: Vec<f64>,
 }
 
 /// Column names in CSV order.
@@ -63,6 +68,7 @@ impl Curves {
             ideal_acc_mps2: v(),
             ideal_torque_nm: v(),
             process_force_n: v(),
+            slip_mps: v(),
         }
     }
 
@@ -92,6 +98,7 @@ impl Curves {
         self.ideal_acc_mps2.push(o.ideal_a);
         self.ideal_torque_nm.push(nan_unless(o.ideal_m12));
         self.process_force_n.push(nan_unless(-o.process_force));
+        self.slip_mps.push(nan_unless(o.v_slip));
     }
 
     /// The columns in CSV order.

@@ -25,6 +25,7 @@ pub fn ideal_outputs(ks: &Kinetostatics, theta0: f64, omega: f64, t: f64) -> Out
         alpha3: f.pose.alpha3,
         f_n: f.joint_force_b(),
         f_t: 0.0,
+        v_slip: f64::NAN,
         m12: f.m12,
         delta: 0.0,
         delta_dot: 0.0,

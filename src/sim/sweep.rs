@@ -188,6 +188,11 @@ fn last_rev(c: Curves) -> Curves {
         ideal_acc_mps2: cut(&c.ideal_acc_mps2),
         ideal_torque_nm: cut(&c.ideal_torque_nm),
         process_force_n: cut(&c.process_force_n),
+        slip_mps: c
+            .slip_mps
+            .get(start..)
+            .map(<[f64]>::to_vec)
+            .unwrap_or_default(),
     }
 }
 

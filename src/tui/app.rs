@@ -24,6 +24,8 @@ pub enum Msg {
     Paste(String),
     Resize(u16, u16),
     JobDone(u64, Box<JobOutput>),
+    /// What the live follower found since its last batch.
+    Live(Box<crate::live::LiveBatch>),
 }
 
 /// A job the app is waiting for.
@@ -113,6 +115,20 @@ impl App {
             help: self.help,
             help_scroll: self.help_scroll,
             prompt: self.prompt.clone(),
+            live: self
+                .session
+                .live
+                .as_ref()
+                .map(|l| super::draw::LiveIndicator {
+                    following: self.ui.follow,
+                    text: l.status(
+                        self.session
+                            .yields
+                            .as_ref()
+                            .and_then(|y| y.report.yield_frac),
+                    ),
+                    alarm: !l.active_alarms.is_empty(),
+                }),
         }
     }
 
@@ -136,6 +152,44 @@ impl App {
                 self.ui.height = h;
             }
             Msg::JobDone(id, out) => self.job_done(id, *out),
+            Msg::Live(b) => {
+                self.session.absorb_live(*b);
+                self.follow_now();
+            }
+        }
+    }
+
+    /// In follow mode, moves the views to the newest data: the Signals
+    /// window ends at the newest sample (keeping its width), Vision shows
+    /// the latest connector.
+    pub fn follow_now(&mut self) {
+        if !self.ui.follow {
+            return;
+        }
+        let Some(live) = &self.session.live else {
+            return;
+        };
+        if let Some(t1) = live.latest_s {
+            let span = self
+                .ui
+                .signals
+                .window
+                .map(|[a, b]| b - a)
+                .filter(|w| w.is_finite() && *w > 0.0)
+                .unwrap_or(2.0)
+                .min(live.config.window_s);
+            self.ui.signals.window = Some([t1 - span, t1]);
+            self.ui.signals.cursor = Some(t1);
+        }
+        if !self.session.images.is_empty() {
+            self.ui.vision.image = self.session.images.len() - 1;
+        }
+    }
+
+    /// A key that looks back in live mode pauses following.
+    fn pause_follow(&mut self) {
+        if self.session.live.is_some() {
+            self.ui.follow = false;
         }
     }
 
@@ -273,6 +327,17 @@ impl App {
                 self.switch(PaneId::ALL[i]);
             }
             KeyCode::Char('T') => self.switch(PaneId::Trend),
+            KeyCode::Char('F') if self.session.live.is_some() => {
+                self.ui.follow = !self.ui.follow;
+                self.follow_now();
+            }
+            KeyCode::End | KeyCode::Char('G')
+                if self.session.live.is_some()
+                    && matches!(self.pane, PaneId::Signals | PaneId::Vision) =>
+            {
+                self.ui.follow = true;
+                self.follow_now();
+            }
             KeyCode::Char('o') => self.prompt = Some(String::new()),
             KeyCode::Down | KeyCode::Char('j') => self.rows(1),
             KeyCode::Up | KeyCode::Char('k') => self.rows(-1),
@@ -414,6 +479,17 @@ impl App {
                 let cycles = set.cycles.clone();
                 let names: Vec<String> = set.channels.iter().map(|c| c.name.clone()).collect();
                 drop(set);
+                let looks_back = matches!(
+                    k.code,
+                    KeyCode::Left
+                        | KeyCode::Right
+                        | KeyCode::Char(
+                            'h' | 'l' | 'H' | 'L' | '+' | '=' | '-' | '_' | '0' | '[' | ']'
+                        )
+                );
+                if looks_back {
+                    self.pause_follow();
+                }
                 let s = &mut self.ui.signals;
                 match k.code {
                     KeyCode::Left if shift => s.pan(-0.5, full),
@@ -450,6 +526,10 @@ impl App {
                 KeyCode::Char('r') if !self.session.logs.is_empty() => {
                     let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
                     self.start_overlay(i);
+                }
+                KeyCode::Char('C') if !self.session.logs.is_empty() => {
+                    let i = self.ui.overlay.log.min(self.session.logs.len() - 1);
+                    self.start_calibration(i);
                 }
                 _ => {}
             },
@@ -488,6 +568,12 @@ impl App {
             }
             PaneId::Vision => {
                 let n = self.session.images.len();
+                if matches!(
+                    k.code,
+                    KeyCode::Left | KeyCode::Right | KeyCode::Char('n' | 'p' | 'h' | 'l')
+                ) {
+                    self.pause_follow();
+                }
                 match k.code {
                     KeyCode::Right | KeyCode::Char('n') | KeyCode::Char('l') if n > 0 => {
                         self.ui.vision.image = (self.ui.vision.image + 1) % n;

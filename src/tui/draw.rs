@@ -41,6 +41,17 @@ pub struct Chrome {
     pub help_scroll: usize,
     /// The open-file prompt's text, while it is open.
     pub prompt: Option<String>,
+    /// Live mode: the indicator (following or paused), the counts, and
+    /// whether an alarm is raised.
+    pub live: Option<LiveIndicator>,
+}
+
+/// The live line's indicator at the start of the status line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveIndicator {
+    pub following: bool,
+    pub text: String,
+    pub alarm: bool,
 }
 
 impl Chrome {
@@ -52,6 +63,7 @@ impl Chrome {
             help: false,
             help_scroll: 0,
             prompt: None,
+            live: None,
         }
     }
 }
@@ -140,7 +152,33 @@ pub fn draw_screen(
     }
     f.render_widget(Paragraph::new(Line::from(spans)), top);
     draw_pane(f, body, view, theme, img);
-    // Status line.
+    // Status line: the live indicator first, then the status.
+    let bottom = match &chrome.live {
+        None => bottom,
+        Some(li) => {
+            let mark = if li.following {
+                "▶ FOLLOW "
+            } else {
+                "❚❚ PAUSED (F/End resumes) "
+            };
+            let text = trunc(
+                &format!("{mark}{} ", li.text),
+                (area.width as usize * 2 / 3).max(10),
+            );
+            let w = (text.chars().count() as u16).min(bottom.width);
+            let [ind, rest] =
+                Layout::horizontal([Constraint::Length(w), Constraint::Min(0)]).areas(bottom);
+            let style = if li.alarm {
+                theme.error()
+            } else if li.following {
+                theme.ok()
+            } else {
+                theme.key()
+            };
+            f.render_widget(Paragraph::new(Line::styled(text, style)), ind);
+            rest
+        }
+    };
     match &chrome.status {
         Status::Hints => {
             let h = hints(chrome.pane);

@@ -114,6 +114,18 @@ impl App {
         }
     }
 
+    /// Calibrates log `index` against the model in the background (the
+    /// Overlay pane's key `C`).
+    pub fn start_calibration(&mut self, index: usize) {
+        match self.session.logs.get(index).map(|l| l.rig.clone()) {
+            Some(Some((log, cycles))) => self.start(JobRequest::Calibrate { index, log, cycles }),
+            Some(None) => self
+                .session
+                .run_calibration_with(index, &Progress::hidden()), // records why not
+            None => {}
+        }
+    }
+
     /// Queues a job; a running job of the same kind (model, study) is
     /// cancelled and its result will be ignored.
     pub fn start(&mut self, req: JobRequest) {
@@ -305,6 +317,21 @@ impl App {
                     self.message = Some((format!("overlay: {e}"), true));
                 }
                 self.session.set_overlay(*r);
+            }
+            JobOutput::Calibrated(r) => {
+                self.message = Some(match &r.report {
+                    Ok(c) => (
+                        format!(
+                            "calibrated {}: {} cycles, {:.1} s",
+                            c.file,
+                            c.cycles,
+                            r.wall_ms / 1e3
+                        ),
+                        false,
+                    ),
+                    Err(e) => (format!("calibration: {e}"), true),
+                });
+                self.session.set_calibration(*r);
             }
             JobOutput::Failed(e) => {
                 if job.kind == JobKind::Methods {

@@ -33,6 +33,16 @@ pub const KEYS: &[(&str, &str, &str)] = &[
         "mouse",
         "click a tab; wheel scrolls (zooms on Signals)",
     ),
+    (
+        "live",
+        "F",
+        "follow the newest data on / off (tui --follow, demo --live)",
+    ),
+    (
+        "live",
+        "End  G",
+        "resume following (Signals, Vision); looking back pauses it",
+    ),
     ("Signals", "h l  ← →", "move the cursor"),
     ("Signals", "H L  Shift-← →", "pan half a window"),
     ("Signals", "+ -", "zoom in / out about the cursor"),
@@ -45,6 +55,11 @@ pub const KEYS: &[(&str, &str, &str)] = &[
     ("Signals", "0", "whole log"),
     ("Overlay", "n p  → ←", "next / previous cycle"),
     ("Overlay", "a", "envelope of all cycles"),
+    (
+        "Overlay",
+        "C",
+        "calibrate the log against the model (background, a few seconds)",
+    ),
     (
         "Model",
         "Enter  e",

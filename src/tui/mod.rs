@@ -42,6 +42,8 @@ pub struct Options {
     pub theme: Option<Theme>,
     /// Start on this pane.
     pub pane: crate::panes::PaneId,
+    /// Follow a live line (`tui --follow`, `demo --live`).
+    pub follow: Option<crate::live::FollowInputs>,
 }
 
 impl Default for Options {
@@ -50,6 +52,7 @@ impl Default for Options {
             images: draw::ImageMode::Auto,
             theme: None,
             pane: crate::panes::PaneId::Session,
+            follow: None,
         }
     }
 }
@@ -142,13 +145,60 @@ fn install_panic_hook() {
     }));
 }
 
+/// The live follower on its own thread: polls when the files change (or
+/// at its interval) and sends each batch with data to the interface; stops
+/// when `stop` is set or the interface is gone.
+pub fn spawn_follower(
+    inputs: crate::live::FollowInputs,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> std::io::Result<std::sync::mpsc::Receiver<crate::live::LiveBatch>> {
+    use std::sync::atomic::Ordering;
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("pinsight-live".into())
+        .spawn(move || {
+            let cfg = inputs.config.clone();
+            let mut f = crate::live::Follower::new(inputs);
+            let mut wake = crate::live::wake::Wake::new(
+                &f.watch_paths(),
+                cfg.notify,
+                cfg.poll_s,
+                cfg.debounce_ms,
+            );
+            let mut changed = None;
+            while !stop.load(Ordering::Relaxed) {
+                let b = f.poll(changed.as_deref());
+                if !b.is_empty() && tx.send(b).is_err() {
+                    return;
+                }
+                changed = wake.wait().changed;
+            }
+        })?;
+    Ok(rx)
+}
+
 /// Runs the TUI on a session until the user quits.
-pub fn run(session: Session, opts: Options) -> anyhow::Result<()> {
+pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
     let start = Instant::now();
     // NO_COLOR is applied by the theme; crossterm's own handling would emit
     // empty colour codes that reset bold and reverse video (pitfalls.md).
     crossterm::style::force_color_output(true);
     let theme = opts.theme.unwrap_or_else(Theme::detect);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let mut live_rx = None;
+    let mut rules = crate::live::AlarmRules::default();
+    if let Some(inputs) = opts.follow.clone() {
+        session.start_live(
+            inputs.config.clone(),
+            inputs
+                .paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect(),
+        );
+        rules = inputs.alarms.clone();
+        live_rx = Some(spawn_follower(inputs, stop.clone())?);
+    }
     install_panic_hook();
     let mut terminal = ratatui::try_init()?;
     let result = (|| -> anyhow::Result<()> {
@@ -194,8 +244,17 @@ pub fn run(session: Session, opts: Options) -> anyhow::Result<()> {
             draw::ImageMode::Off => ImageCache::off(),
         };
         app.session.display = Some(format!("{colours}; images: {}", img.protocol_name()));
-        event_loop(&mut terminal, &mut app, &worker, &theme, &mut img)
+        event_loop(
+            &mut terminal,
+            &mut app,
+            &worker,
+            &theme,
+            &mut img,
+            live_rx.as_ref(),
+            &rules,
+        )
     })();
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
     restore_terminal();
     result
 }
@@ -206,6 +265,8 @@ fn event_loop<B: Backend>(
     worker: &Worker,
     theme: &Theme,
     img: &mut ImageCache,
+    live: Option<&std::sync::mpsc::Receiver<crate::live::LiveBatch>>,
+    rules: &crate::live::AlarmRules,
 ) -> anyhow::Result<()>
 where
     B::Error: Send + Sync + 'static,
@@ -229,7 +290,10 @@ where
             }
             return Ok(());
         }
-        let timeout = if app.running.is_empty() {
+        let timeout = if live.is_some() {
+            // New data arrives at any moment: look for it often.
+            Duration::from_millis(40)
+        } else if app.running.is_empty() {
             Duration::from_millis(500)
         } else {
             Duration::from_millis(100)
@@ -256,6 +320,23 @@ where
         for (id, out) in worker.poll() {
             app.update(Msg::JobDone(id, Box::new(out)));
             dirty = true;
+        }
+        if let Some(rx) = live {
+            for b in rx.try_iter() {
+                app.update(Msg::Live(Box::new(b)));
+                dirty = true;
+            }
+            // Raised alarms: the bell / OSC 9 when asked for.
+            if let Some(l) = app.session.live.as_mut() {
+                for a in l.announce.drain(..) {
+                    let n = rules.notification(&a);
+                    if !n.is_empty() {
+                        let mut out = std::io::stdout();
+                        let _ = out.write_all(n.as_bytes());
+                        let _ = out.flush();
+                    }
+                }
+            }
         }
         // Redraw for a gauge only when a job's progress moved.
         let now: Vec<(u64, u64, u64)> = app

@@ -5,6 +5,7 @@
 //! A job is a plain request ([`JobRequest`]) executed by [`execute`], a
 //! pure function also used by tests to run jobs in line.
 
+use crate::engine::calibrate::{CalibrationRun, run_calibration};
 use crate::engine::entries::{ImageEntry, Loaded};
 use crate::engine::load::load_path;
 use crate::engine::model::{ModelRun, StudySetup, run_model, run_study};
@@ -31,6 +32,7 @@ pub enum JobKind {
     Inspect,
     Yield,
     Overlay,
+    Calibrate,
     Monitor,
     Trend,
 }
@@ -81,6 +83,12 @@ pub enum JobRequest {
         log: Arc<RigLog>,
         cycles: Arc<CycleSet>,
     },
+    /// One log calibrated against the model (the Overlay pane's key `C`).
+    Calibrate {
+        index: usize,
+        log: Arc<RigLog>,
+        cycles: Arc<CycleSet>,
+    },
 }
 
 impl JobRequest {
@@ -93,6 +101,7 @@ impl JobRequest {
             JobRequest::Inspect { .. } => JobKind::Inspect,
             JobRequest::Yield { .. } => JobKind::Yield,
             JobRequest::Overlay { .. } => JobKind::Overlay,
+            JobRequest::Calibrate { .. } => JobKind::Calibrate,
             JobRequest::Monitor { .. } => JobKind::Monitor,
             JobRequest::Trend { .. } => JobKind::Trend,
         }
@@ -106,6 +115,7 @@ impl JobRequest {
             JobRequest::Inspect { image, .. } => format!("inspecting {}", image.name),
             JobRequest::Yield { images, .. } => format!("yield over {} images", images.len()),
             JobRequest::Overlay { log, .. } => format!("overlay of {}", log.file),
+            JobRequest::Calibrate { log, .. } => format!("calibrating {}", log.file),
             JobRequest::Monitor { logs, .. } => format!("monitor over {} log(s)", logs.len()),
             JobRequest::Trend { logs, .. } => format!("trend over {} log(s)", logs.len()),
             JobRequest::Load { paths } => match paths.as_slice() {
@@ -126,6 +136,7 @@ pub enum JobOutput {
     Inspected(Box<Inspected>),
     Yield(Box<YieldRun>),
     Overlay(Box<OverlayRun>),
+    Calibrated(Box<CalibrationRun>),
     Monitor(Box<Result<crate::process::run::MonitorRun, String>>),
     Trend(Box<Result<crate::wear::TrendReport, String>>),
     /// The job panicked (a defect): the message, for the status line.
@@ -155,6 +166,9 @@ pub fn execute(req: JobRequest, progress: &Progress) -> JobOutput {
         }
         JobRequest::Overlay { index, log, cycles } => {
             JobOutput::Overlay(Box::new(run_overlay(index, &log, &cycles, progress)))
+        }
+        JobRequest::Calibrate { index, log, cycles } => {
+            JobOutput::Calibrated(Box::new(run_calibration(index, &log, &cycles, progress)))
         }
         JobRequest::Monitor {
             recipes,

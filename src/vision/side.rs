@@ -79,7 +79,13 @@ pub fn inspect_side<P: Px>(
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
     // 1. Housing edge, coarse: top of the longest silhouette run per column.
-    let min_run = (ch / 40).max(3);
+    // A run must stand clear of the noise (a few coarse pixels; half a tip
+    // when the scale says how wide a tip is), not a share of the frame: a
+    // thin housing block in a tall frame is still the housing, and the
+    // robust line below takes stray runs as outliers.
+    let min_run = pin_px_prior.map_or(3, |p| {
+        ((0.5 * p / k as f64) as usize).clamp(3, (ch / 40).max(3))
+    });
     let mut tops: Vec<(f64, f64)> = Vec::new();
     for x in 0..cw {
         let (mut best, mut best_start, mut run, mut start) = (0usize, 0usize, 0usize, 0usize);
@@ -236,36 +242,59 @@ pub fn inspect_side<P: Px>(
         if len < 4.0 || xb <= xa + 4 {
             continue;
         }
-        // Per-row coverage centroid across the bar, over its middle part.
+        // Centre across the bar over its middle part, from row profiles
+        // averaged along the expected axis (perpendicular to the housing
+        // edge): one row's edges are lost in the noise of a dim backlight
+        // (a noise spike passes for the edge), the mean of many rows is
+        // not. The two halves' centres tell a lean (a pin bent sideways).
         let ya = (tip_guess + 0.3 * len).round() as usize;
         let yb = (base - 0.15 * len).round().max(ya as f64 + 1.0) as usize;
-        let (mut ys, mut xs, mut widths) = (Vec::new(), Vec::new(), Vec::new());
-        for y in ya..yb.min(plane.h) {
-            let prof: Vec<f32> = (xa..=xb).map(|x| sign * plane.at(x, y)).collect();
-            if let Some((l, r)) = bar_edges(&prof) {
-                ys.push(y as f64);
-                xs.push(xa as f64 + 0.5 * (l + r));
-                widths.push((r - l) as f32);
-            }
-        }
-        if ys.len() < 3 {
+        let yb = yb.min(plane.h);
+        if yb < ya + 3 {
             continue;
         }
-        // Axis: perpendicular to the housing edge (dx/dy = −b) through the
-        // mean centre, unless the free fit shows a clear lean (a pin bent
-        // sideways), in which case the free line is used.
-        let pts: Vec<(f64, f64)> = ys.iter().zip(&xs).map(|(y, x)| (*y, *x)).collect();
-        let my = ys.iter().sum::<f64>() / ys.len() as f64;
-        let mx = xs.iter().sum::<f64>() / xs.len() as f64;
+        let ym = 0.5 * (ya + yb - 1) as f64;
+        let shear = -line.b;
+        let mean_prof = |y0: usize, y1: usize| -> Vec<f32> {
+            let n = (y1 - y0).max(1) as f32;
+            (xa..=xb)
+                .map(|x| {
+                    (y0..y1)
+                        .map(|y| {
+                            let xf = (x as f64 + shear * (y as f64 - ym))
+                                .clamp(0.0, (plane.w - 1) as f64);
+                            sign * plane.bilinear(xf, y as f64)
+                        })
+                        .sum::<f32>()
+                        / n
+                })
+                .collect()
+        };
+        let ymid = (ya + yb) / 2;
+        let (Some((l, r)), Some((l1, r1)), Some((l2, r2))) = (
+            bar_edges(&mean_prof(ya, yb)),
+            bar_edges(&mean_prof(ya, ymid)),
+            bar_edges(&mean_prof(ymid, yb)),
+        ) else {
+            continue;
+        };
+        let mx = xa as f64 + 0.5 * (l + r);
+        // Centres of the halves, at their mean rows, relative to the
+        // perpendicular through the whole bar's centre.
+        let lean = (0.5 * (l2 + r2) - 0.5 * (l1 + r1)) / (0.5 * (yb - ya) as f64);
         let perp = fit::Line {
-            a: mx + line.b * my,
+            a: mx + line.b * ym,
             b: -line.b,
         };
-        let axis = match fit::robust_line(&pts, 0.5) {
-            Some(f) if (f.line.b - perp.b).abs() * (yb - ya) as f64 > 1.5 => f.line,
-            _ => perp,
+        let axis = if lean.abs() * (yb - ya) as f64 > 1.5 {
+            fit::Line {
+                a: mx - (perp.b + lean) * ym,
+                b: perp.b + lean,
+            }
+        } else {
+            perp
         };
-        let width_px = median_f32(&mut widths) as f64;
+        let width_px = r - l;
         // Tip: the apex of the half-level contour, corrected for the blur's
         // pull on a rounded end (`side_row::tip_crossing`, the row's median
         // shape and blur below).

@@ -5,12 +5,14 @@
 //! ([`forecast`]). No terminal code and no files: `engine::trend` reads the
 //! logs, calibrates them and keeps the cache. See docs/trend.md.
 
+pub mod archard;
 pub mod fit;
 pub mod forecast;
 pub mod history;
 pub mod limit;
 pub mod report;
 
+pub use archard::{ArchardFit, WearWork, work_ladder};
 pub use fit::{FitError, LineFit, fit_line};
 pub use forecast::{Forecast, forecast};
 pub use history::{Abscissa, HistoryPoint};

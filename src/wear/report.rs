@@ -3,6 +3,7 @@
 //! chart per head (clearance ± U95 against the abscissa, the fitted line
 //! with its confidence band, the limit and the forecast crossing).
 
+use super::archard::ArchardFit;
 use super::fit::{LineFit, t_quantile};
 use super::forecast::Forecast;
 use super::history::{Abscissa, HistoryPoint};
@@ -18,17 +19,17 @@ pub enum WearModel {
     /// Clearance linear in cumulative cycles (or days).
     #[default]
     Linear,
+    /// Archard: dc/dn = k·W(c), W the simulated sliding work per cycle
+    /// ([`super::archard`]); needs the head's cycle counter.
+    Archard,
 }
 
 impl WearModel {
     pub fn parse(s: &str) -> Result<Self, String> {
         match s {
             "linear" => Ok(WearModel::Linear),
-            "archard" => Err(
-                "--model archard is not built yet (docs/trend.md, \"Not yet\"); use --model linear"
-                    .into(),
-            ),
-            _ => Err(format!("--model '{s}': expected linear")),
+            "archard" => Ok(WearModel::Archard),
+            _ => Err(format!("--model '{s}': expected linear or archard")),
         }
     }
 }
@@ -49,7 +50,12 @@ pub struct HeadTrend {
     pub abscissa: Option<Abscissa>,
     /// The abscissa of each point (cycles or days).
     pub x: Vec<f64>,
+    /// The straight line fitted: the clearance against x (linear model), or
+    /// G(c) = ∫dc/W against cycles (Archard: the slope is k).
     pub fit: Result<LineFit, String>,
+    /// The Archard fit's k, W(c) and the wear rate now (`--model archard`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub archard: Option<ArchardFit>,
     pub cycles_per_day: Option<f64>,
     pub limit: Option<ClearanceLimit>,
     pub forecast: Result<Forecast, String>,
@@ -87,6 +93,56 @@ fn number(x: f64) -> String {
 }
 
 impl HeadTrend {
+    /// The fitted clearance (mm) at abscissa x: the line, or G⁻¹ of it (Archard).
+    pub fn fitted_mm(&self, x: f64) -> Option<f64> {
+        let f = self.fit.as_ref().ok()?;
+        Some(match &self.archard {
+            Some(a) => a.work.g_inv(f.at(x)),
+            None => f.at(x),
+        })
+    }
+
+    /// The fit's confidence band (mm) at x for the t factor `t`.
+    pub fn band_mm(&self, x: f64, t: f64) -> Option<(f64, f64)> {
+        let f = self.fit.as_ref().ok()?;
+        let (lo, hi) = (f.at(x) - t * f.se_at(x), f.at(x) + t * f.se_at(x));
+        Some(match &self.archard {
+            Some(a) => (a.work.g_inv(lo), a.work.g_inv(hi)),
+            None => (lo, hi),
+        })
+    }
+
+    /// The wear rate as one line: the slope (linear), or k and the rate at
+    /// the last log (Archard).
+    pub fn rate_text(&self) -> String {
+        let unit = self.abscissa.map_or("", |a| a.unit()).trim_end_matches('s');
+        let f = match &self.fit {
+            Ok(f) => f,
+            Err(e) => return format!("no fit: {e}"),
+        };
+        let gof = format!("R² {:.3}, χ²/ν {:.2} (ν = {})", f.r2, f.chi2_red, f.dof);
+        match &self.archard {
+            Some(a) => format!(
+                "Archard k {} mm/J (95 % [{}, {}]); wear now {} mm per {unit} [{}, {}] at {:.3} mm ({:.3e} J/cycle sliding work); {gof}",
+                number(a.k_mm_per_j),
+                number(a.k_lo95),
+                number(a.k_hi95),
+                number(a.rate_now),
+                number(a.rate_now_lo95),
+                number(a.rate_now_hi95),
+                a.clearance_now_mm,
+                a.work.work_at(a.clearance_now_mm)
+            ),
+            None => format!(
+                "wear rate {} mm per {unit} (95 % [{}, {}]), clearance at 0: {:.4} mm; {gof}",
+                number(f.slope),
+                number(f.slope_lo95),
+                number(f.slope_hi95),
+                f.intercept
+            ),
+        }
+    }
+
     /// The forecast as a sentence.
     pub fn forecast_text(&self) -> String {
         let unit = self.abscissa.map_or("", |a| a.unit());
@@ -124,7 +180,7 @@ impl TrendReport {
         );
         for h in &self.heads {
             for (p, x) in h.points.iter().zip(&h.x) {
-                let fitted = h.fit.as_ref().map(|f| f.at(*x)).ok();
+                let fitted = h.fitted_mm(*x);
                 let _ = writeln!(
                     s,
                     "{},{},{},{},{},{},{},{},{:.2},{:.6},{:.6},{:.6},{}",
@@ -161,29 +217,24 @@ impl TrendReport {
         );
         for h in &self.heads {
             let _ = writeln!(s, "## Head `{}`\n\n**{}**\n", h.rig, h.verdict);
-            let unit = h.abscissa.map_or("", |a| a.unit());
-            match &h.fit {
-                Ok(f) => {
+            let _ = writeln!(s, "- {}", h.rate_text());
+            if let Ok(f) = &h.fit
+                && f.birge_scaled
+            {
+                s.push_str("- the scatter exceeds the calibrations' U95: the fit's uncertainty is scaled by χ²/ν\n");
+            }
+            if let Some(a) = &h.archard {
+                s.push_str("\n| clearance mm | sliding work J/cycle | ± s.e. | peak contact force N |\n|---:|---:|---:|---:|\n");
+                for p in &a.work.ladder {
                     let _ = writeln!(
                         s,
-                        "- wear rate {} mm per {} (95 % [{}, {}]), clearance at 0: {:.4} mm; R² {:.3}, χ²/ν {:.2} (ν = {}){}",
-                        number(f.slope),
-                        unit.trim_end_matches('s'),
-                        number(f.slope_lo95),
-                        number(f.slope_hi95),
-                        f.intercept,
-                        f.r2,
-                        f.chi2_red,
-                        f.dof,
-                        if f.birge_scaled {
-                            "; the scatter exceeds the calibrations' U95, the uncertainty is scaled by χ²/ν"
-                        } else {
-                            ""
-                        }
+                        "| {:.3} | {:.4e} | {:.1e} | {:.1} |",
+                        p.clearance_mm, p.work_j, p.work_se_j, p.peak_force_n
                     );
                 }
-                Err(e) => {
-                    let _ = writeln!(s, "- no fit: {e}");
+                s.push('\n');
+                for n in &a.notes {
+                    let _ = writeln!(s, "- note: {n}");
                 }
             }
             if let Some(l) = &h.limit {
@@ -301,15 +352,30 @@ pub fn head_chart(h: &HeadTrend, level: f64) -> LineChart {
         let xs: Vec<f64> = (0..=60)
             .map(|i| x_first + (x_end - x_first) * i as f64 / 60.0)
             .collect();
+        let band: Vec<(f64, f64)> = xs
+            .iter()
+            .map(|x| h.band_mm(*x, t).unwrap_or((f64::NAN, f64::NAN)))
+            .collect();
         chart.bands.push(Band {
             label: format!("fit {:.0} % band", level * 100.0),
             x: xs.clone(),
-            lower: xs.iter().map(|x| f.at(*x) - t * f.se_at(*x)).collect(),
-            upper: xs.iter().map(|x| f.at(*x) + t * f.se_at(*x)).collect(),
+            lower: band.iter().map(|b| b.0).collect(),
+            upper: band.iter().map(|b| b.1).collect(),
             color: Some(1),
         });
+        let name = if h.archard.is_some() {
+            "Archard fit"
+        } else {
+            "linear fit"
+        };
         chart.series.push(
-            Series::line("linear fit", xs.iter().map(|x| (*x, f.at(*x))).collect()).with_color(1),
+            Series::line(
+                name,
+                xs.iter()
+                    .map(|x| (*x, h.fitted_mm(*x).unwrap_or(f64::NAN)))
+                    .collect(),
+            )
+            .with_color(1),
         );
         if let Some(l) = h.limit.as_ref().and_then(|l| l.limit_mm) {
             chart.series.push(

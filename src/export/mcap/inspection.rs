@@ -69,48 +69,18 @@ impl<'a> Frame<'a> {
     }
 }
 
-const GREEN: Color = Color {
-    r: 0.1,
-    g: 0.8,
-    b: 0.2,
-    a: 1.0,
-};
-const RED: Color = Color {
-    r: 0.95,
-    g: 0.15,
-    b: 0.1,
-    a: 1.0,
-};
-const ORANGE: Color = Color {
-    r: 1.0,
-    g: 0.6,
-    b: 0.0,
-    a: 1.0,
-};
-const MAGENTA: Color = Color {
-    r: 0.9,
-    g: 0.1,
-    b: 0.9,
-    a: 1.0,
-};
-const CYAN: Color = Color {
-    r: 0.1,
-    g: 0.7,
-    b: 0.9,
-    a: 0.8,
-};
-const CLEAR: Color = Color {
-    r: 0.0,
-    g: 0.0,
-    b: 0.0,
-    a: 0.0,
-};
-const BACKDROP: Color = Color {
-    r: 0.0,
-    g: 0.0,
-    b: 0.0,
-    a: 0.6,
-};
+/// A colour from its red, green, blue and alpha in [0, 1].
+const fn rgba(r: f64, g: f64, b: f64, a: f64) -> Color {
+    Color { r, g, b, a }
+}
+
+const GREEN: Color = rgba(0.1, 0.8, 0.2, 1.0);
+const RED: Color = rgba(0.95, 0.15, 0.1, 1.0);
+const ORANGE: Color = rgba(1.0, 0.6, 0.0, 1.0);
+const MAGENTA: Color = rgba(0.9, 0.1, 0.9, 1.0);
+const CYAN: Color = rgba(0.1, 0.7, 0.9, 0.8);
+const CLEAR: Color = rgba(0.0, 0.0, 0.0, 0.0);
+const BACKDROP: Color = rgba(0.0, 0.0, 0.0, 0.6);
 
 fn colour(s: PinStatus) -> Color {
     match s {

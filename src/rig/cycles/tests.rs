@@ -1,9 +1,11 @@
 //! Tests of the cycle analysis: unwrapping, segmentation at TDC, offsets
 //! and per-cycle figures on constructed signals with exact truth.
 
+use super::fit::{fit_phase, speed_stats, to_grid};
 use super::*;
 use crate::model::Params;
 use crate::model::kinematics::Geometry;
+use crate::rig::signals::Signal;
 
 fn signal(kind: SignalKind, t: Vec<i64>, v: Vec<f64>) -> Signal {
     Signal {

@@ -203,3 +203,21 @@ pub struct ImageEntry {
     pub data: Option<Vec<u8>>,
     pub error: Option<String>,
 }
+
+impl ImageEntry {
+    /// An image message of `channel` at `log_time` in the item at
+    /// `item_offset`, before its fields are read.
+    pub fn new(channel: u16, log_time: u64, item_offset: u64) -> Self {
+        ImageEntry {
+            channel,
+            log_time,
+            item_offset,
+            frame_id: String::new(),
+            format: String::new(),
+            stamp_ns: None,
+            data_len: 0,
+            data: None,
+            error: None,
+        }
+    }
+}

@@ -329,17 +329,7 @@ impl DecodeOut {
         codec: &BinaryCodec,
         full: bool,
     ) {
-        let mut e = ImageEntry {
-            channel: ch,
-            log_time,
-            item_offset: self.item_offset,
-            frame_id: String::new(),
-            format: String::new(),
-            stamp_ns: None,
-            data_len: 0,
-            data: None,
-            error: None,
-        };
+        let mut e = ImageEntry::new(ch, log_time, self.item_offset);
         match codec.decode(data, &mut self.scratch) {
             Err(err) => e.error = Some(err),
             Ok(()) => {
@@ -362,17 +352,7 @@ impl DecodeOut {
     }
 
     fn decode_image(&mut self, ch: u16, log_time: u64, data: &[u8], full: bool) {
-        let mut e = ImageEntry {
-            channel: ch,
-            log_time,
-            item_offset: self.item_offset,
-            frame_id: String::new(),
-            format: String::new(),
-            stamp_ns: None,
-            data_len: 0,
-            data: None,
-            error: None,
-        };
+        let mut e = ImageEntry::new(ch, log_time, self.item_offset);
         let mut raw_data: Option<&[u8]> = None;
         let mut stamp: Option<Val> = None;
         let res = json::for_each_member(data, |k, v| {

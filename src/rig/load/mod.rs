@@ -272,7 +272,7 @@ impl State {
     }
 }
 
-fn build_plans(
+pub(crate) fn build_plans(
     channels: &BTreeMap<u16, ChannelDef>,
     schemas: &BTreeMap<u16, SchemaDef>,
     map: &ChannelMap,
@@ -300,7 +300,7 @@ fn build_plans(
     p
 }
 
-fn parse_cycle(frame_id: &str) -> Option<u64> {
+pub(crate) fn parse_cycle(frame_id: &str) -> Option<u64> {
     frame_id.strip_prefix("cycle-")?.trim().parse().ok()
 }
 

@@ -588,23 +588,26 @@ pub fn scan(src: &Source, opts: &ReadOptions) -> Result<Scan, LogError> {
         }
     }
     w.scan.items.sort_by_key(|i| i.offset);
-    if w.unknown_records > 0 {
-        let n = w.unknown_records;
-        w.finding(
+    for (n, severity, what) in [
+        (
+            w.unknown_records,
             Severity::Warning,
-            FindingCode::UnknownRecord,
-            None,
-            format!("{n} record(s) with reserved, unknown opcodes skipped"),
-        );
-    }
-    if w.private_records > 0 {
-        let n = w.private_records;
-        w.finding(
+            "record(s) with reserved, unknown opcodes skipped",
+        ),
+        (
+            w.private_records,
             Severity::Info,
-            FindingCode::UnknownRecord,
-            None,
-            format!("{n} private (application-specific) record(s) skipped"),
-        );
+            "private (application-specific) record(s) skipped",
+        ),
+    ] {
+        if n > 0 {
+            w.finding(
+                severity,
+                FindingCode::UnknownRecord,
+                None,
+                format!("{n} {what}"),
+            );
+        }
     }
     w.scan.info.attachments = w.scan.attachments.len() as u64;
     w.scan.info.metadata_records = w.scan.metadata.iter().map(|m| m.name.clone()).collect();

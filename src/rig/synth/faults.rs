@@ -107,35 +107,100 @@ type FaultRng = crate::rng::SplitMix64<0x5EED_FA17_0000_0016>;
 
 /// Draws `n` cycles' insertions, reproducibly from `seed`.
 pub fn draw_cycles(n: usize, rates: &FaultRates, seed: u64) -> Vec<CycleDraw> {
-    let mut rng = FaultRng::new(seed);
-    (0..n)
-        .map(|k| {
-            let faulty = rng.uniform() < rates.fault_rate;
-            let kind = InsertionFault::ALL[(rng.uniform() * 4.0) as usize % 4];
-            let mut d = CycleDraw {
-                index: k as u64,
-                fault: faulty.then_some(kind),
-                force_scale: 1.0 + rates.force_scale_sd * rng.normal(),
-                depth_dev_mm: rates.depth_sd_mm * rng.normal(),
-                landing_n_per_mm: 0.0,
-                shift_mm: 0.0,
-            };
-            let (a, b, c, e) = (rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform());
-            let lerp = |r: [f64; 2], u: f64| r[0] + (r[1] - r[0]) * u;
-            match d.fault {
-                Some(InsertionFault::TooDeep) => d.depth_dev_mm += lerp(rates.too_deep_mm, a),
-                Some(InsertionFault::NotFullyInserted) => {
-                    d.depth_dev_mm -= lerp(rates.not_fully_mm, b)
-                }
-                Some(InsertionFault::OutOfPosition) => {
-                    d.landing_n_per_mm = lerp(rates.landing_n_per_mm, c);
-                    d.shift_mm = lerp(rates.shift_mm, e) * if a < 0.5 { -1.0 } else { 1.0 };
-                }
-                Some(InsertionFault::MissingPin) | None => {}
+    DrawStream::new(rates.clone(), seed).take(n).collect()
+}
+
+/// The draws of [`draw_cycles`] one cycle at a time (the same sequence for
+/// the same seed), for a line that runs for hours without holding every
+/// cycle's draw (`pinsight rig-sim`).
+#[derive(Debug, Clone)]
+pub struct DrawStream {
+    rng: FaultRng,
+    rates: FaultRates,
+    k: u64,
+}
+
+impl DrawStream {
+    pub fn new(rates: FaultRates, seed: u64) -> Self {
+        DrawStream {
+            rng: FaultRng::new(seed),
+            rates,
+            k: 0,
+        }
+    }
+
+    /// The next cycle's draw with this fault rate (the rates' own rate is
+    /// replaced: a line whose faults come in bursts).
+    pub fn next_with_rate(&mut self, fault_rate: f64) -> CycleDraw {
+        let rates = &self.rates;
+        let rng = &mut self.rng;
+        let k = self.k;
+        self.k += 1;
+        let faulty = rng.uniform() < fault_rate;
+        let kind = InsertionFault::ALL[(rng.uniform() * 4.0) as usize % 4];
+        let mut d = CycleDraw {
+            index: k,
+            fault: faulty.then_some(kind),
+            force_scale: 1.0 + rates.force_scale_sd * rng.normal(),
+            depth_dev_mm: rates.depth_sd_mm * rng.normal(),
+            landing_n_per_mm: 0.0,
+            shift_mm: 0.0,
+        };
+        let (a, b, c, e) = (rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform());
+        let lerp = |r: [f64; 2], u: f64| r[0] + (r[1] - r[0]) * u;
+        match d.fault {
+            Some(InsertionFault::TooDeep) => d.depth_dev_mm += lerp(rates.too_deep_mm, a),
+            Some(InsertionFault::NotFullyInserted) => d.depth_dev_mm -= lerp(rates.not_fully_mm, b),
+            Some(InsertionFault::OutOfPosition) => {
+                d.landing_n_per_mm = lerp(rates.landing_n_per_mm, c);
+                d.shift_mm = lerp(rates.shift_mm, e) * if a < 0.5 { -1.0 } else { 1.0 };
             }
-            d
-        })
-        .collect()
+            Some(InsertionFault::MissingPin) | None => {}
+        }
+        d
+    }
+}
+
+impl Iterator for DrawStream {
+    type Item = CycleDraw;
+    fn next(&mut self) -> Option<CycleDraw> {
+        let r = self.rates.fault_rate;
+        Some(self.next_with_rate(r))
+    }
+}
+
+/// The force of one revolution's insertion (see the module doc): the
+/// load-cell reading at stroke `s` (m) moving at `v4` (m/s) with the draw
+/// `d`, for the mechanism `ideal` inserting `pins` pins.
+pub fn insertion_force(ideal: &IdealTruth, pins: u32, d: &CycleDraw, s: f64, v4: f64) -> f64 {
+    let (v0, v1) = (ideal.v0, ideal.v1);
+    let depth = s - (ideal.standoff_m - d.depth_dev_mm * 1e-3);
+    if depth <= 0.0 {
+        return 0.0;
+    }
+    match d.fault {
+        Some(InsertionFault::OutOfPosition) => {
+            // Pins pressed onto the housing: a stiff rise going down,
+            // nothing to pull out coming back up.
+            if v4 > 0.0 {
+                d.landing_n_per_mm * depth * 1e3 * cd(v4, v0, v1)
+            } else {
+                0.0
+            }
+        }
+        _ => {
+            let gang = match d.fault {
+                Some(InsertionFault::MissingPin) => 1.0 - 1.0 / pins.max(1) as f64,
+                _ => 1.0,
+            };
+            let k = d.force_scale * gang;
+            if v4 > 0.0 {
+                k * ideal.f_ins.eval(depth) * cd(v4, v0, v1)
+            } else {
+                -k * ideal.f_wd.eval(depth) * cd(-v4, v0, v1)
+            }
+        }
+    }
 }
 
 /// The ideal mechanism with each cycle's insertion (see the module doc).
@@ -164,38 +229,13 @@ impl Truth for FaultTruth {
         let g = &self.ideal.geometry;
         let pose = g.pose(theta2, omega2, 0.0);
         let s = pose.x4 - g.x4_tdc();
-        let (v0, v1) = (self.ideal.v0, self.ideal.v1);
         let Some(d) = self.draw_at(theta2) else {
             return self.ideal.eval(0.0, theta2, omega2);
         };
-        let depth = s - (self.ideal.standoff_m - d.depth_dev_mm * 1e-3);
-        if depth <= 0.0 {
-            return (s * 1e3, 0.0);
-        }
-        let f = match d.fault {
-            Some(InsertionFault::OutOfPosition) => {
-                // Pins pressed onto the housing: a stiff rise going down,
-                // nothing to pull out coming back up.
-                if pose.v4 > 0.0 {
-                    d.landing_n_per_mm * depth * 1e3 * cd(pose.v4, v0, v1)
-                } else {
-                    0.0
-                }
-            }
-            _ => {
-                let gang = match d.fault {
-                    Some(InsertionFault::MissingPin) => 1.0 - 1.0 / self.pins.max(1) as f64,
-                    _ => 1.0,
-                };
-                let k = d.force_scale * gang;
-                if pose.v4 > 0.0 {
-                    k * self.ideal.f_ins.eval(depth) * cd(pose.v4, v0, v1)
-                } else {
-                    -k * self.ideal.f_wd.eval(depth) * cd(-pose.v4, v0, v1)
-                }
-            }
-        };
-        (s * 1e3, f)
+        (
+            s * 1e3,
+            insertion_force(&self.ideal, self.pins, d, s, pose.v4),
+        )
     }
 }
 

@@ -1,6 +1,7 @@
 //! A wear series: N logs of one head over weeks whose true clearance grows
 //! by a known law, c(n) = c₀ + rate·n in the head's cumulative cycles n
-//! (rate 0: a head that does not wear). Each log carries the head's cycle
+//! (rate 0: a head that does not wear), or any law the caller tabulates
+//! (`clearance_table`, e.g. an Archard law it computed with the model). Each log carries the head's cycle
 //! counter at its start in the `rig` metadata (`head_cycles`), starts
 //! `days_between` days after the previous one and is a clearance-model
 //! truth seen through the default sensors. The metadata clearance is the
@@ -28,6 +29,9 @@ pub struct WearSeries {
     pub cycles_per_log: usize,
     pub motor_rpm: f64,
     pub seed: u64,
+    /// When not empty: the true clearance (mm) at head cycle n, linear
+    /// between these (head cycles, mm) points, instead of c₀ + rate·n.
+    pub clearance_table: Vec<(f64, f64)>,
 }
 
 impl Default for WearSeries {
@@ -43,6 +47,7 @@ impl Default for WearSeries {
             cycles_per_log: 12,
             motor_rpm: 1200.0,
             seed: 1,
+            clearance_table: Vec::new(),
         }
     }
 }
@@ -59,7 +64,16 @@ pub struct SeriesLog {
 impl WearSeries {
     /// The true clearance at head cycle n.
     pub fn clearance_at(&self, n: f64) -> f64 {
-        self.c0_mm + self.rate_mm_per_cycle * n
+        let t = &self.clearance_table;
+        if t.is_empty() {
+            return self.c0_mm + self.rate_mm_per_cycle * n;
+        }
+        let i = t.partition_point(|p| p.0 < n).clamp(1, t.len().max(2) - 1);
+        if t.len() == 1 {
+            return t[0].1;
+        }
+        let (a, b) = (t[i - 1], t[i]);
+        a.1 + (n - a.0) / (b.0 - a.0) * (b.1 - a.1)
     }
 
     /// Writes the logs into `dir` as `<rig_id>-NN.mcap`.

@@ -47,14 +47,40 @@ pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme)
         lines.push(Line::raw(""));
         lines.push(Line::styled(m.clone(), theme.warn()));
     }
+    // The calibration (once run, key C) between the figures and the cycles.
+    let calibration: Vec<Line> = match &v.calibration {
+        None => Vec::new(),
+        Some(c) => c
+            .rows
+            .iter()
+            .map(|(k, x)| kv_line(k, x.clone(), theme))
+            .chain(
+                c.error
+                    .iter()
+                    .map(|e| Line::styled(format!("not calibrated: {e}"), theme.warn())),
+            )
+            .collect(),
+    };
+    let calib_h = if calibration.is_empty() {
+        0
+    } else {
+        (calibration.len() as u16 + 2).min(side.height / 2)
+    };
     let table_h = if v.cycles.is_empty() {
         0
     } else {
-        (v.cycles.len() as u16 + 3).min(side.height / 2)
+        (v.cycles.len() as u16 + 3).min((side.height - calib_h) / 2)
     };
-    let [info, table_area] =
-        Layout::vertical([Constraint::Min(4), Constraint::Length(table_h)]).areas(side);
+    let [info, calib_area, table_area] = Layout::vertical([
+        Constraint::Min(4),
+        Constraint::Length(calib_h),
+        Constraint::Length(table_h),
+    ])
+    .areas(side);
     text_block(f, info, "Fidelity and figures", lines, theme);
+    if calib_h > 0 {
+        text_block(f, calib_area, "Calibration (C)", calibration, theme);
+    }
     if table_h > 0 {
         let rows: Vec<Row> = v
             .cycles

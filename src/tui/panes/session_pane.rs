@@ -8,12 +8,52 @@ pub(super) fn session(f: &mut Frame, area: Rect, v: &SessionView, theme: &Theme)
     } else {
         (v.errors.len() as u16 + 2).min(area.height / 3).max(3)
     };
-    let [head, main, errs] = Layout::vertical([
+    let live_h = match &v.live {
+        Some(l) => (l.events.len() as u16 + 3).min(area.height / 3).max(4),
+        None => 0,
+    };
+    let [head, main, live_area, errs] = Layout::vertical([
         Constraint::Length(5),
         Constraint::Min(4),
+        Constraint::Length(live_h),
         Constraint::Length(err_h),
     ])
     .areas(area);
+    if let Some(l) = &v.live {
+        let mut lines = vec![Line::styled(
+            format!(
+                "{} {}",
+                if l.following { "following:" } else { "paused:" },
+                l.status
+            ),
+            theme.header(),
+        )];
+        if !l.alarms.is_empty() {
+            lines.push(Line::styled(
+                format!(
+                    "ALARM {}{}",
+                    l.alarms.join(", "),
+                    l.last_alarm
+                        .as_ref()
+                        .map(|a| format!(" — {a}"))
+                        .unwrap_or_default()
+                ),
+                theme.error(),
+            ));
+        }
+        for e in &l.events {
+            let style = if e.starts_with("ALARM") {
+                theme.error()
+            } else {
+                theme.base()
+            };
+            lines.push(Line::styled(e.clone(), style));
+        }
+        f.render_widget(
+            Paragraph::new(lines).block(block("Live".to_string(), theme)),
+            live_area,
+        );
+    }
     let head_lines = vec![
         Line::from(Span::styled(v.title.clone(), theme.header())),
         kv_line(

@@ -1,7 +1,8 @@
 //! Drawing of the Trend pane: the clearance history chart (each log ± U95,
 //! the fitted wear with its band, the limit), the verdict and the facts,
-//! and the history table. At 80×24 the chart takes the left 60 %, the text
-//! the right.
+//! and the history table (newest first). Below 100 columns (80×24) the
+//! chart spans the width above, the facts and the history share the lower
+//! half; wider, the chart takes the left 60 % and the text the right.
 
 use super::*;
 use crate::panes::trend::TrendView;
@@ -20,9 +21,25 @@ pub(super) fn trend(f: &mut Frame, area: Rect, v: &TrendView, theme: &Theme) {
         text_block(f, area, "Trend", lines, theme);
         return;
     };
-    let [left, side] =
-        Layout::horizontal([Constraint::Percentage(60), Constraint::Percentage(40)]).areas(area);
-    draw_chart(f, left, chart, theme);
+    let narrow = area.width < 100;
+    let (chart_area, info, list) = if narrow {
+        let chart_h = (area.height / 2).max(6).min(area.height);
+        let [top, bottom] =
+            Layout::vertical([Constraint::Length(chart_h), Constraint::Min(3)]).areas(area);
+        let [info, list] =
+            Layout::horizontal([Constraint::Percentage(58), Constraint::Percentage(42)])
+                .areas(bottom);
+        (top, info, list)
+    } else {
+        let [left, side] =
+            Layout::horizontal([Constraint::Percentage(60), Constraint::Percentage(40)])
+                .areas(area);
+        let info_h = (side.height / 2 + 2).min(side.height);
+        let [info, list] =
+            Layout::vertical([Constraint::Length(info_h), Constraint::Min(3)]).areas(side);
+        (left, info, list)
+    };
+    draw_chart(f, chart_area, chart, theme);
     let mut lines = Vec::new();
     if v.heads.len() > 1 {
         lines.push(kv_line(
@@ -33,12 +50,6 @@ pub(super) fn trend(f: &mut Frame, area: Rect, v: &TrendView, theme: &Theme) {
                 v.head + 1,
                 v.heads.len()
             ),
-            theme,
-        ));
-    } else {
-        lines.push(kv_line(
-            "head",
-            v.rig.clone().unwrap_or_else(|| "–".into()),
             theme,
         ));
     }
@@ -57,18 +68,17 @@ pub(super) fn trend(f: &mut Frame, area: Rect, v: &TrendView, theme: &Theme) {
             theme.muted(),
         ));
     }
-    let info_h = (side.height / 2 + 2).min(side.height);
-    let [info, list] =
-        Layout::vertical([Constraint::Length(info_h), Constraint::Min(3)]).areas(side);
     f.render_widget(
-        Paragraph::new(lines)
-            .wrap(Wrap { trim: true })
-            .block(block("Wear and forecast", theme)),
+        Paragraph::new(lines).wrap(Wrap { trim: true }).block(block(
+            format!("Wear and forecast · {}", v.rig.as_deref().unwrap_or("–")),
+            theme,
+        )),
         info,
     );
     let rows: Vec<Row> = v
         .history
         .iter()
+        .rev()
         .map(|r| {
             Row::new(vec![
                 Cell::from(r.start.clone()),
@@ -86,6 +96,6 @@ pub(super) fn trend(f: &mut Frame, area: Rect, v: &TrendView, theme: &Theme) {
         ],
     )
     .header(Row::new(vec!["start", "c mm", "U95"]).style(theme.header()))
-    .block(block("History", theme));
+    .block(block("History (newest first)", theme));
     f.render_widget(t, list);
 }

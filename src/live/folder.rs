@@ -1,0 +1,207 @@
+//! A watched folder: camera images arriving, and rig logs of new runs
+//! (a rig that starts a new file per run). Each file is reported once, in
+//! the order it arrived (by modification time, then name).
+//!
+//! The files already seen are remembered for [`FORGET_S`] seconds after
+//! their modification time; older ones are summarised by a watermark (a
+//! file modified before it is not new), so a shift's thousands of images
+//! do not grow the memory. A file copied in later with an old modification
+//! time (`cp -p`) is therefore not seen.
+
+use crate::rig::report::{Finding, FindingCode, Severity};
+use crate::vision::batch::IMAGE_EXTENSIONS;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime};
+
+/// Seconds a seen file is remembered by name.
+pub const FORGET_S: u64 = 120;
+/// An image file must be this old (s) before it is read (a camera writing
+/// in place may not have finished it).
+pub const SETTLE_MS: u64 = 150;
+
+/// New files found by a scan.
+#[derive(Debug, Default)]
+pub struct FolderScan {
+    pub images: Vec<PathBuf>,
+    pub logs: Vec<PathBuf>,
+    pub findings: Vec<Finding>,
+    /// The folder's state changed to missing (true) or back (false).
+    pub missing_changed: Option<bool>,
+}
+
+/// One watched folder.
+pub struct FolderTail {
+    pub path: PathBuf,
+    seen: HashMap<PathBuf, SystemTime>,
+    watermark: Option<SystemTime>,
+    pub missing: bool,
+    /// Images found but not settled yet (looked at again at every scan).
+    pending: Vec<(PathBuf, SystemTime)>,
+    /// The folder was there at some scan.
+    ever: bool,
+    /// Images present at the first scan are read too (the run's backlog);
+    /// logs present then: only the newest one.
+    first: bool,
+}
+
+fn ext(p: &Path) -> String {
+    p.extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default()
+}
+
+impl FolderTail {
+    pub fn new(path: &Path) -> Self {
+        FolderTail {
+            path: path.to_path_buf(),
+            seen: HashMap::new(),
+            watermark: None,
+            missing: false,
+            pending: Vec::new(),
+            ever: false,
+            first: true,
+        }
+    }
+
+    fn walk(dir: &Path, out: &mut Vec<(PathBuf, SystemTime)>, depth: usize) -> std::io::Result<()> {
+        for e in std::fs::read_dir(dir)?.flatten() {
+            let p = e.path();
+            let Ok(md) = e.metadata() else { continue };
+            if md.is_dir() {
+                if depth < 8 {
+                    let _ = Self::walk(&p, out, depth + 1);
+                }
+            } else if md.is_file() {
+                let x = ext(&p);
+                if x == "mcap" || IMAGE_EXTENSIONS.contains(&x.as_str()) {
+                    out.push((p, md.modified().unwrap_or(SystemTime::UNIX_EPOCH)));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Lists the folder (or, with `changed`, looks only at those paths) and
+    /// returns the files not seen before.
+    pub fn scan(&mut self, changed: Option<&[PathBuf]>) -> FolderScan {
+        let mut out = FolderScan::default();
+        let mut files = Vec::new();
+        let listed = match changed {
+            Some(paths) if !self.first && !self.missing => {
+                for p in paths.iter().filter(|p| p.starts_with(&self.path)) {
+                    let x = ext(p);
+                    if x != "mcap" && !IMAGE_EXTENSIONS.contains(&x.as_str()) {
+                        continue;
+                    }
+                    if let Ok(md) = std::fs::metadata(p)
+                        && md.is_file()
+                    {
+                        files.push((p.clone(), md.modified().unwrap_or(SystemTime::UNIX_EPOCH)));
+                    }
+                }
+                Ok(())
+            }
+            _ => Self::walk(&self.path, &mut files, 0),
+        };
+        let gone = !self.path.is_dir();
+        if gone && !self.ever {
+            // Not there yet (a camera that has not started): waited for quietly.
+            self.missing = true;
+            return out;
+        }
+        self.ever |= !gone;
+        if gone != self.missing {
+            self.missing = gone;
+            out.missing_changed = Some(gone);
+            out.findings.push(Finding::new(
+                if gone {
+                    Severity::Warning
+                } else {
+                    Severity::Info
+                },
+                FindingCode::MissingChannel,
+                &self.path.display().to_string(),
+                None,
+                None,
+                if gone {
+                    format!(
+                        "folder {} is not there (any more){}; it is looked for again at every poll",
+                        self.path.display(),
+                        match &listed {
+                            Err(e) => format!(" ({e})"),
+                            Ok(()) => String::new(),
+                        }
+                    )
+                } else {
+                    format!("folder {} is there; following it", self.path.display())
+                },
+            ));
+        }
+        if gone {
+            return out;
+        }
+        let now = SystemTime::now();
+        let settle = Duration::from_millis(SETTLE_MS);
+        files.append(&mut self.pending);
+        files.sort_by(|a, b| a.1.cmp(&b.1).then(a.0.cmp(&b.0)));
+        files.dedup_by(|a, b| a.0 == b.0);
+        let mut newest_log: Option<PathBuf> = None;
+        let mut held = false;
+        for (p, m) in files {
+            if self.watermark.is_some_and(|w| m <= w) || self.seen.get(&p) == Some(&m) {
+                continue;
+            }
+            let is_log = ext(&p) == "mcap";
+            if !is_log && (held || now.duration_since(m).unwrap_or_default() < settle) {
+                // Not settled (or after one that is not): in order, later.
+                held = true;
+                self.pending.push((p, m));
+                continue;
+            }
+            if is_log && self.seen.contains_key(&p) {
+                continue; // a growing log is followed, not found again
+            }
+            self.seen.insert(p.clone(), m);
+            if is_log {
+                if self.first {
+                    newest_log = Some(p);
+                } else {
+                    out.logs.push(p);
+                }
+            } else {
+                out.images.push(p);
+            }
+        }
+        if let Some(l) = newest_log {
+            out.logs.push(l);
+        }
+        self.first = false;
+        // Forget old names behind a watermark.
+        let cutoff = now - Duration::from_secs(FORGET_S);
+        let old: Vec<(PathBuf, SystemTime)> = self
+            .seen
+            .iter()
+            .filter(|(_, m)| **m < cutoff)
+            .map(|(p, m)| (p.clone(), *m))
+            .collect();
+        for (p, m) in old {
+            self.seen.remove(&p);
+            self.watermark = Some(self.watermark.map_or(m, |w| w.max(m)));
+        }
+        out
+    }
+
+    /// Marks a file as seen (a log followed by name).
+    pub fn mark_seen(&mut self, p: &Path) {
+        let m = std::fs::metadata(p)
+            .and_then(|m| m.modified())
+            .unwrap_or_else(|_| SystemTime::now());
+        self.seen.insert(p.to_path_buf(), m);
+    }
+
+    /// Names remembered (for the memory bound).
+    pub fn remembered(&self) -> usize {
+        self.seen.len()
+    }
+}

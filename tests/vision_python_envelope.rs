@@ -1,0 +1,108 @@
+//! Verdict accuracy on images from an independent renderer:
+//! `tests/python/connector_render.py` (numpy/OpenCV/Pillow, its own
+//! optics: pillbox and mixed PSFs, bevelled tips with a glint, polynomial
+//! vignetting, Poisson-Gaussian noise, OpenCV/Pillow JPEG) draws every
+//! factor of the envelope at once, with exact truth in the spec's format.
+//! Nothing in pinsight was tuned on these seeds (700 000 …): a guard
+//! against tuning to our own generator.
+//!
+//! The floors are a ratchet at the level measured when the test landed
+//! (2026-11-26, figures beside the constants at the end), less a small margin;
+//! the 1000-image held-out figures (seeds 500 020 – 501 019) and the OpenCV
+//! baseline's on the same images are in docs/vision.md, from
+//! `python3 tests/python/vision_crosscheck.py DIR`.
+
+use pinsight::vision::{self, InspectOptions, PinStatus, Recipe, truth};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const FIRST: u64 = 700_000;
+const N: u64 = 60;
+
+#[test]
+fn verdicts_hold_on_an_independent_renderers_images() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("pinsight-pyenv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let st = Command::new("python3")
+        .arg(root.join("tests/python/connector_render.py"))
+        .arg(&dir)
+        .arg(FIRST.to_string())
+        .arg(N.to_string())
+        .status()
+        .expect(
+            "python3 with numpy, opencv-python-headless and Pillow (.ci/python-requirements.txt)",
+        );
+    assert!(st.success(), "the Python renderer failed");
+    let mut jsons: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("rendered dir")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    jsons.sort();
+    assert_eq!(jsons.len() as u64, N, "one truth file per image");
+    let (mut right, mut errors, mut pins, mut pins_wrong) = (0usize, 0usize, 0usize, 0usize);
+    let mut ok_err = Vec::new();
+    for j in &jsons {
+        let text = std::fs::read_to_string(j).expect("truth");
+        let t = truth::Truth::from_json(&text).expect("truth in the spec's format");
+        let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+        let recipe = Recipe::load(&dir.join(&t.recipe)).expect("recipe");
+        let img = dir.join(v["image"].as_str().expect("image name"));
+        pins += t.pins.len();
+        match vision::inspect_path(&recipe, &img, &InspectOptions::default()) {
+            Err(e) => {
+                eprintln!("{}: ERROR {e}", img.display());
+                errors += 1;
+                pins_wrong += t.pins.len();
+            }
+            Ok(ins) => {
+                let c = truth::compare(&ins, &t, 15.0);
+                if c.verdict_ok {
+                    right += 1;
+                } else {
+                    eprintln!("{}: wrong verdict {:?}", img.display(), ins.verdict);
+                }
+                pins_wrong += c.status_mismatches.len();
+                ok_err.extend(
+                    c.centre_errors
+                        .iter()
+                        .filter(|e| e.2 == PinStatus::Ok)
+                        .map(|e| e.3.hypot(e.4)),
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    ok_err.sort_by(|a, b| a.total_cmp(b));
+    let median = ok_err[ok_err.len() / 2];
+    let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
+    eprintln!(
+        "{N} images: verdicts right {right} ({:.1} %), errors {errors}, pin statuses right {:.2} %, ok-pin centre error median {median:.3} px",
+        pct(right, N as usize),
+        pct(pins - pins_wrong, pins)
+    );
+    assert!(
+        pct(right, N as usize) >= FLOOR_VERDICTS,
+        "verdicts right {:.1} %",
+        pct(right, N as usize)
+    );
+    assert!(
+        pct(pins - pins_wrong, pins) >= FLOOR_PINS,
+        "pin statuses right {:.2} %",
+        pct(pins - pins_wrong, pins)
+    );
+    assert!(errors <= MAX_ERRORS, "{errors} images ended as errors");
+    assert!(
+        median <= MAX_MEDIAN_PX,
+        "ok-pin centre error median {median:.3} px"
+    );
+}
+
+// Measured 2026-11-26 on these 60: 59 right (98.3 %), 1 error (a side
+// view whose housing edge was not measurable between the pins), pin
+// statuses 98.49 %, ok-pin centre error median 0.062 px.
+const FLOOR_VERDICTS: f64 = 96.5;
+const FLOOR_PINS: f64 = 98.0;
+const MAX_ERRORS: usize = 2;
+const MAX_MEDIAN_PX: f64 = 0.075;
