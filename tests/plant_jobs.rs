@@ -148,7 +148,10 @@ fn sweep_shards_merge_to_the_single_run() {
                 "sweep.csv differs beyond wall_ms"
             );
         } else {
-            assert!(bytes == other, "{name} differs between the single run and the merge");
+            assert!(
+                bytes == other,
+                "{name} differs between the single run and the merge"
+            );
         }
     }
 
