@@ -15,7 +15,7 @@
 //! single run's, byte for byte (`tests/plant_monitor.rs`). The monitor
 //! reports no quantiles, so no sketch is needed.
 
-use super::partial::{FileCheck, Found, Header, Partial};
+use super::partial::{FileCheck, FolderFiles, Found, Header, Partial};
 use crate::export::parquet::cycles::{CYCLES, cycles_table};
 use crate::export::parquet::{PartitionKey, partition_file_name, table_files};
 use crate::process::ProcessRecipe;
@@ -72,7 +72,7 @@ pub fn monitor_folder(
     recipe: &ProcessRecipe,
     outputs: &MonitorOutputs,
     shard: Option<(Header, &[u64])>,
-) -> Result<(Vec<(String, Vec<u8>)>, Vec<String>), String> {
+) -> Result<FolderFiles, String> {
     let mut files: Vec<(String, Vec<u8>)> = vec![
         (
             "monitor.json".into(),

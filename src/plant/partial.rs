@@ -108,6 +108,11 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// An output folder's files as (name, bytes) — names may be paths below
+/// the folder — and the entries an earlier run left there that this run
+/// does not write (to be removed when the folder is committed).
+pub type FolderFiles = (Vec<(String, Vec<u8>)>, Vec<String>);
+
 /// A file of the shard's folder that the merge reads: its name (relative
 /// to the folder), size and CRC-32.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -241,7 +246,7 @@ pub fn read_body<B: serde::de::DeserializeOwned>(
 /// are one job's complete set: one job, one pinsight, one format, one
 /// input list, one shard count, the same settings, every shard exactly
 /// once. Returns them ordered by shard index.
-pub fn check_set<'a>(heads: &'a [(Found, Header)]) -> Result<Vec<&'a (Found, Header)>, String> {
+pub fn check_set(heads: &[(Found, Header)]) -> Result<Vec<&(Found, Header)>, String> {
     let Some((f0, h0)) = heads.first() else {
         return Err("nothing to merge".into());
     };

@@ -14,7 +14,7 @@
 //! merged folder is the single run's, byte for byte
 //! (`tests/plant_shard.rs`, `tests/plant_parquet.rs`).
 
-use super::partial::{FileCheck, Found, Header, Partial};
+use super::partial::{FileCheck, FolderFiles, Found, Header, Partial};
 use crate::export::parquet::yield_tables::{
     IMAGES, PINS, images_schema, pins_schema, yield_tables,
 };
@@ -134,7 +134,7 @@ pub fn yield_folder(
     title: &str,
     outputs: &YieldOutputs,
     shard: Option<(Header, YieldAcc)>,
-) -> Result<(Vec<(String, Vec<u8>)>, Vec<String>), String> {
+) -> Result<FolderFiles, String> {
     let records = results
         .iter()
         .zip(orders)

@@ -20,7 +20,7 @@ pub mod table;
 pub mod yield_tables;
 
 pub use hive::{PartitionKey, parse_partition_keys};
-pub use table::{ParquetError, read_file, read_table, write_table};
+pub use table::{ParquetError, read_file, write_table};
 
 /// The files of one table in an output folder: `NAME.parquet`, or with
 /// partition keys `NAME/k=v/…/FILE` per partition (`FILE` is
@@ -49,4 +49,24 @@ pub fn partition_file_name(k: u32, n: u32) -> String {
     } else {
         format!("shard-{k}-of-{n}.parquet")
     }
+}
+
+/// Reads the table `name` of an output folder: `DIR/NAME.parquet`, or the
+/// hive-partitioned folder `DIR/NAME/` (every `*.parquet` below it, the
+/// partition columns restored from the folder names). `None` when neither
+/// exists.
+pub fn read_table(
+    dir: &std::path::Path,
+    name: &str,
+    schema: &arrow_schema::SchemaRef,
+) -> Result<Option<arrow_array::RecordBatch>, ParquetError> {
+    let file = dir.join(format!("{name}.parquet"));
+    if file.is_file() {
+        return table::read_file(&file, schema).map(Some);
+    }
+    let folder = dir.join(name);
+    if folder.is_dir() {
+        return hive::read_partitioned(&folder, schema).map(Some);
+    }
+    Ok(None)
 }

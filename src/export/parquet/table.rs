@@ -118,26 +118,6 @@ pub fn conform(b: &RecordBatch, schema: &SchemaRef) -> Result<RecordBatch, Strin
     RecordBatch::try_new(schema.clone(), cols).map_err(|e| e.to_string())
 }
 
-/// Reads the table `name` of an output folder: `DIR/NAME.parquet`, or the
-/// hive-partitioned folder `DIR/NAME/` (every `*.parquet` below it, the
-/// partition columns restored from the folder names). `None` when neither
-/// exists.
-pub fn read_table(
-    dir: &Path,
-    name: &str,
-    schema: &SchemaRef,
-) -> Result<Option<RecordBatch>, ParquetError> {
-    let file = dir.join(format!("{name}.parquet"));
-    if file.is_file() {
-        return read_file(&file, schema).map(Some);
-    }
-    let folder = dir.join(name);
-    if folder.is_dir() {
-        return super::hive::read_partitioned(&folder, schema).map(Some);
-    }
-    Ok(None)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
