@@ -3,7 +3,7 @@
 //! exactly one shard, a log's images stay together, each item's result is
 //! the one a single run gives, a re-run shard writes the same bytes, and
 //! `pinsight merge` of the shards' partials writes the single run's folder
-//! byte for byte.
+//! byte for byte (its Parquet tables included).
 
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -28,6 +28,7 @@ fn run_yield(out: &Path, shard: Option<&str>, env: &[(&str, &str)]) -> std::proc
         .arg(&imgs)
         .arg("--jobs")
         .arg("1")
+        .args(["--items", "json,csv,parquet"])
         .arg("--out")
         .arg(out);
     for v in [
@@ -188,6 +189,8 @@ fn eight_shards_partition_the_single_run() {
         "items.csv",
         "pins.csv",
         "yield.md",
+        "images.parquet",
+        "pins.parquet",
         "partial.json",
     ] {
         assert_eq!(

@@ -6,27 +6,34 @@
 //! `overlay --params` read. The job is the engine's
 //! ([`crate::engine::calibrate::calibrate_job`]), as for the Overlay pane's
 //! calibration and batch `run calibrate`.
+//!
+//! Several logs (files or folders of them), or `--shard k/n` (one part of
+//! the sorted logs, docs/scale.md): `--out` is a folder and each log gets
+//! `DIR/<log name>/params.toml` and `calibration.json`; a log that fails is
+//! listed and the others go on (exit status 3). Nothing to merge: the
+//! shards' folders together hold every log once (`plant::log_batch`).
 
 use super::common::ParamArgs;
 use super::overlay::load_and_cycles;
 use crate::cli::common::{outln, outp};
 use crate::engine::calibrate::calibrate_job;
-use crate::overlay::calibrate::CalibrateOptions;
+use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport};
 pub use crate::overlay::outputs::calibration_text as summary_text;
 use crate::progress::{Progress, ProgressBarGuard};
-use anyhow::bail;
+use anyhow::{anyhow, bail};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The rig log (MCAP).
-    #[arg(value_name = "LOG.mcap")]
-    pub log: PathBuf,
+    /// The rig log (MCAP); several logs or folders of them run one after the other.
+    #[arg(value_name = "LOG.mcap", required = true)]
+    pub logs: Vec<PathBuf>,
     /// Nominal parameters (default: preset paper + the log's `rig` metadata).
     #[command(flatten)]
     pub params: ParamArgs,
-    /// Write the calibrated parameter file (TOML) here.
+    /// Write the calibrated parameter file (TOML) here (several logs: a folder,
+    /// one sub-folder per log).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
     /// Print the report as JSON on stdout.
@@ -50,9 +57,79 @@ pub struct Args {
     /// level); the parameter file then says driver = "motor".
     #[arg(long)]
     pub flywheel: bool,
+    /// Run only shard K of N (K from 0) of the sorted logs; default from the
+    /// cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let shard =
+        crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    if let ([log], true) = (args.logs.as_slice(), shard.is_whole())
+        && !log.is_dir()
+    {
+        let report = calibrate_one(&args, log)?;
+        if let Some(path) = &args.out {
+            crate::output::write_file(path, report.params_toml.as_bytes())?;
+        }
+        if args.json {
+            outln!("{}", serde_json::to_string_pretty(&report)?)?;
+        } else {
+            outp!("{}", summary_text(&report))?;
+            if let Some(path) = &args.out {
+                outln!("  wrote the parameter file {}", path.display())?;
+            }
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let logs = crate::plant::log_batch::log_batch(shard, &args.logs);
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} log(s)", logs.len());
+    }
+    let mut failed = 0;
+    let mut reports = Vec::new();
+    for l in &logs {
+        let r = match &l.missing {
+            Some(why) => Err(anyhow!("{}: {why}", l.path.display())),
+            None => calibrate_one(&args, &l.path),
+        };
+        let r = r.and_then(|report| {
+            if let Some(dir) = &args.out {
+                let mut out = crate::output::Report::new_in(&dir.join(&l.name))?;
+                out.add("params.toml", report.params_toml.as_bytes())?;
+                out.add("calibration.json", &serde_json::to_vec_pretty(&report)?)?;
+                out.commit()?;
+            }
+            Ok(report)
+        });
+        match r {
+            Ok(report) => {
+                if !args.json {
+                    outp!("{}", summary_text(&report))?;
+                }
+                reports.push(serde_json::json!({"file": l.path, "report": report}));
+            }
+            Err(e) => {
+                failed += 1;
+                let e = crate::cli::error_text(&e);
+                eprintln!("error: {e}");
+                reports.push(serde_json::json!({"file": l.path, "error": e}));
+            }
+        }
+    }
+    if args.json {
+        outln!("{}", serde_json::to_string_pretty(&reports)?)?;
+    }
+    Ok(if failed > 0 {
+        ExitCode::from(3)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// One log's calibration.
+fn calibrate_one(args: &Args, path: &std::path::Path) -> anyhow::Result<CalibrationReport> {
     let mut opts = CalibrateOptions {
         fit_f_ins: !args.keep_f_ins,
         flywheel: args.flywheel,
@@ -68,23 +145,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let lopts = args.log_read.load_options()?;
     let (log, file_params, cs) =
-        load_and_cycles(&args.log, &lopts, &args.params, args.points, !args.json)?;
+        load_and_cycles(path, &lopts, &args.params, args.points, !args.json)?;
     let progress = Progress::new(0);
-    let report = {
-        let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "calibrate"));
-        calibrate_job(&log, &cs, file_params, &args.params.sets, &opts, &progress)
-            .map_err(anyhow::Error::msg)?
-    };
-    if let Some(path) = &args.out {
-        crate::output::write_file(path, report.params_toml.as_bytes())?;
-    }
-    if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
-    } else {
-        outp!("{}", summary_text(&report))?;
-        if let Some(path) = &args.out {
-            outln!("  wrote the parameter file {}", path.display())?;
-        }
-    }
-    Ok(ExitCode::SUCCESS)
+    let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "calibrate"));
+    calibrate_job(&log, &cs, file_params, &args.params.sets, &opts, &progress)
+        .map_err(anyhow::Error::msg)
 }

@@ -15,6 +15,14 @@
 //! pin positions, overall, by lot, by speed), connectors.csv (with `-r`)
 //! and a control chart PNG per characteristic (`chart-<name>.png`).
 //!
+//! `--parquet` adds `cycles.parquet` (one row per cycle: verdict, reasons,
+//! process values, the model band's residuals; docs/scale.md), and
+//! `--partition-by part,lot` writes it as hive-style partition folders.
+//!
+//! `--shard k/n` runs one part of the sorted logs (docs/scale.md); with
+//! `--out` the shard writes `partial.json` for `pinsight merge`, which
+//! gives the single run's folder (`plant::monitor`).
+//!
 //! `--learn N` first learns the recipe's envelopes from the first N good
 //! cycles and writes the recipe back (atomically), then monitors with it.
 //!
@@ -24,9 +32,11 @@
 
 use crate::cli::common::{outln, outp};
 use crate::engine::process::{learn_from_logs, monitor_logs};
+use crate::plant::monitor::{MonitorOutputs, exit_status, monitor_folder};
+use crate::plant::partial::{Header, Job};
+use crate::plant::shard::{Shard, split_list};
 use crate::process::ProcessRecipe;
-use crate::process::charts::chart_files;
-use crate::process::report::{connectors_csv, cycles_csv, spc_csv, summary_text};
+use crate::process::report::{cycles_csv, summary_text};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::RecipeBook;
 use anyhow::anyhow;
@@ -67,13 +77,54 @@ pub struct Args {
     /// Also write the verdicts as MCAP for Foxglove (with the log's own messages).
     #[arg(long, value_name = "FILE")]
     pub mcap: Option<PathBuf>,
+    /// With --out: also write cycles.parquet (one row per cycle, zstd).
+    #[arg(long)]
+    pub parquet: bool,
+    /// Write the Parquet table as hive-style partition folders by these keys (part, lot),
+    /// e.g. part,lot; implies --parquet.
+    #[arg(long, value_name = "KEYS")]
+    pub partition_by: Option<String>,
+    /// Run only shard K of N (K from 0) of the sorted logs; default from the
+    /// cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub log_read: super::common::LogReadArgs,
 }
 
+/// `--parquet` and `--partition-by` as the folder's outputs.
+fn outputs_of(args: &Args) -> anyhow::Result<MonitorOutputs> {
+    let keys = match &args.partition_by {
+        Some(k) => {
+            let keys = crate::export::parquet::parse_partition_keys(k)
+                .map_err(|e| anyhow!("--partition-by: {e}"))?;
+            if keys.contains(&crate::export::parquet::PartitionKey::Rig) {
+                return Err(anyhow!(
+                    "--partition-by: the cycles table has no rig column (part, lot)"
+                ));
+            }
+            Some(keys)
+        }
+        None => args.parquet.then(Vec::new),
+    };
+    Ok(MonitorOutputs { parquet: keys })
+}
+
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let outputs = outputs_of(&args)?;
+    let shard = Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    if !shard.is_whole() && args.learn.is_some() {
+        return Err(anyhow!(
+            "--learn with --shard: each shard would learn from its own logs; learn once \
+             (pinsight monitor LOG --learn N), then run the shards with the learned recipe"
+        ));
+    }
     let mut recipe = ProcessRecipe::load(&args.process).map_err(|e| anyhow!("{e}"))?;
     let opts = args.log_read.load_options()?;
+    let part = split_list(shard, args.logs.clone(), |p| p.display().to_string());
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} log(s)", part.kept.len());
+    }
     let progress = Progress::new(0);
     let quiet = args.json || args.csv;
     let _bar = (!quiet).then(|| ProgressBarGuard::start(progress.clone(), "monitor"));
@@ -88,7 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let book = (!args.recipes.is_empty()).then(|| RecipeBook::load(&args.recipes));
     let mut run = monitor_logs(
         &recipe,
-        &args.logs,
+        &part.kept,
         &opts,
         book.as_ref(),
         args.band,
@@ -97,23 +148,37 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     run.learned = learned;
     drop(_bar);
     if let Some(dir) = &args.out {
-        let mut rep = crate::output::Report::new_in(dir)?;
-        rep.add("monitor.json", &serde_json::to_vec_pretty(&run)?)?;
-        rep.add("cycles.csv", cycles_csv(&run).as_bytes())?;
-        rep.add("spc.csv", spc_csv(&run).as_bytes())?;
-        if run.confusion.is_some() {
-            rep.add("connectors.csv", connectors_csv(&run).as_bytes())?;
-        }
-        for (name, png) in chart_files(&run)? {
-            rep.add(&name, &png)?;
-        }
-        rep.commit()?;
+        let header = (!shard.is_whole()).then(|| {
+            let settings = format!(
+                "process recipe {}; vision recipes {}; band {}; load {:?}; outputs {}",
+                serde_json::to_string(&recipe).unwrap_or_default(),
+                book.as_ref()
+                    .map(|b| serde_json::to_string(&b.recipes).unwrap_or_default())
+                    .unwrap_or_default(),
+                args.band,
+                opts,
+                serde_json::to_string(&outputs).unwrap_or_default(),
+            );
+            (
+                Header::new(
+                    Job::Monitor,
+                    shard,
+                    part.units,
+                    part.digest.clone(),
+                    &settings,
+                ),
+                part.orders.as_slice(),
+            )
+        });
+        let (files, remove) =
+            monitor_folder(&run, &recipe, &outputs, header).map_err(anyhow::Error::msg)?;
+        crate::vision::report::write_files(dir, &files, &remove).map_err(anyhow::Error::msg)?;
     }
     if let Some(file) = &args.dfq {
         crate::output::write_file(file, &crate::process::qdas::dfq(&run))?;
     }
     if let Some(file) = &args.mcap {
-        let bytes = crate::export::mcap::monitor::monitor_mcap(&run, &args.logs)
+        let bytes = crate::export::mcap::monitor::monitor_mcap(&run, &part.kept)
             .map_err(|e| anyhow!("{}: {e}", file.display()))?;
         crate::output::write_file(file, &bytes)?;
     }
@@ -124,11 +189,5 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         outp!("{}", summary_text(&run))?;
     }
-    Ok(if run.logs.iter().any(|l| l.report.is_err()) {
-        ExitCode::from(3)
-    } else if run.nok > 0 || run.not_evaluated > 0 {
-        ExitCode::from(1)
-    } else {
-        ExitCode::SUCCESS
-    })
+    Ok(ExitCode::from(exit_status(&run)))
 }

@@ -6,6 +6,12 @@
 //! [`crate::overlay::outputs::write_outputs`] (JSON, CSV tables, PNG charts).
 //!
 //! Without `--out` only the summary (or with `--json` the report) is printed.
+//!
+//! Several logs (files or folders of them), or `--shard k/n` (one part of
+//! the sorted logs, docs/scale.md): each log's outputs go to `--out
+//! DIR/<log name>/`; a log that fails is listed and the others go on (exit
+//! status 3). No merge is needed: the shards' folders together hold every
+//! log once (`plant::log_batch`).
 
 use super::common::ParamArgs;
 use crate::cli::common::{outln, outp};
@@ -25,9 +31,9 @@ use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The rig log (MCAP).
-    #[arg(value_name = "LOG.mcap")]
-    pub log: PathBuf,
+    /// The rig log (MCAP); several logs or folders of them run one after the other.
+    #[arg(value_name = "LOG.mcap", required = true)]
+    pub logs: Vec<PathBuf>,
     #[command(flatten)]
     pub params: ParamArgs,
     /// Fidelity level of the prediction: clearance (default: the ensemble), ideal, kinematic, or auto.
@@ -71,6 +77,10 @@ pub struct Args {
     /// Crank-angle grid points per revolution.
     #[arg(long, default_value_t = 720, value_parser = super::common::bounds::points)]
     pub points: usize,
+    /// Run only shard K of N (K from 0) of the sorted logs; default from the
+    /// cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 /// Parses `A..B`, `A..`, `..B` (cycle indices, B exclusive).
@@ -124,6 +134,66 @@ pub fn load_and_cycles(
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let shard =
+        crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    if let ([log], true) = (args.logs.as_slice(), shard.is_whole())
+        && !log.is_dir()
+    {
+        let report = overlay_one(&args, log, args.out.as_deref(), args.mcap.as_deref())?;
+        if args.json {
+            outln!("{}", serde_json::to_string_pretty(&report)?)?;
+        } else {
+            outp!("{}", summary_text(&report, args.out.as_deref()))?;
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    if args.mcap.is_some() {
+        bail!("--mcap takes one log (one file per log): run the logs one at a time");
+    }
+    let logs = crate::plant::log_batch::log_batch(shard, &args.logs);
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} log(s)", logs.len());
+    }
+    let mut failed = 0;
+    let mut reports = Vec::new();
+    for l in &logs {
+        let dir = args.out.as_ref().map(|d| d.join(&l.name));
+        let r = match &l.missing {
+            Some(why) => Err(anyhow!("{}: {why}", l.path.display())),
+            None => overlay_one(&args, &l.path, dir.as_deref(), None),
+        };
+        match r {
+            Ok(report) => {
+                if !args.json {
+                    outp!("{}", summary_text(&report, dir.as_deref()))?;
+                }
+                reports.push(serde_json::json!({"file": l.path, "report": report}));
+            }
+            Err(e) => {
+                failed += 1;
+                let e = crate::cli::error_text(&e);
+                eprintln!("error: {e}");
+                reports.push(serde_json::json!({"file": l.path, "error": e}));
+            }
+        }
+    }
+    if args.json {
+        outln!("{}", serde_json::to_string_pretty(&reports)?)?;
+    }
+    Ok(if failed > 0 {
+        ExitCode::from(3)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// One log's overlay, its outputs written to `out` and `mcap` when given.
+fn overlay_one(
+    args: &Args,
+    path: &Path,
+    out: Option<&Path>,
+    mcap: Option<&Path>,
+) -> anyhow::Result<crate::overlay::compare::OverlayReport> {
     let cycles = args.cycles.as_deref().map(parse_cycle_range).transpose()?;
     let level = match LevelChoice::parse(&args.level) {
         Some(LevelChoice::Fixed(l)) => Some(l),
@@ -144,7 +214,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let lopts = args.log_read.load_options()?;
     let (log, file_params, cs) =
-        load_and_cycles(&args.log, &lopts, &args.params, args.points, !args.json)?;
+        load_and_cycles(path, &lopts, &args.params, args.points, !args.json)?;
     let mut extra_notes = Vec::new();
     let level = match level {
         Some(l) => l,
@@ -173,13 +243,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .map_err(anyhow::Error::msg)?
     };
     report.notes.extend(extra_notes);
-    if let Some(dir) = &args.out {
+    if let Some(dir) = out {
         write_outputs(dir, &report)?;
     }
-    if let Some(file) = &args.mcap {
+    if let Some(file) = mcap {
         // The log is mapped, not read (it may be large).
         let src = if args.mcap_signals {
-            Some(crate::rig::mcap_read::Source::open(&args.log)?)
+            Some(crate::rig::mcap_read::Source::open(path)?)
         } else {
             None
         };
@@ -191,12 +261,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .map_err(|e| anyhow!("{}: {e}", file.display()))?;
         crate::output::write_file(file, &bytes)?;
     }
-    if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?)?;
-    } else {
-        outp!("{}", summary_text(&report, args.out.as_deref()))?;
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok(report)
 }
 
 #[cfg(test)]

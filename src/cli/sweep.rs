@@ -1,11 +1,16 @@
 //! `pinsight sweep`: the paper's study (clearance × speed × material).
+//!
+//! `--shard k/n` runs case `i` of the grid when `i mod n = k`; the shard
+//! also writes `partial.json`, and `pinsight merge` gives the single run's
+//! study (`plant::sweep`).
 
 use super::common::{ParamArgs, parse_list_f64};
 use crate::cli::common::outln;
-use crate::plot::render_png;
+use crate::plant::partial::{Header, Job};
+use crate::plant::shard::{Shard, split_list};
+use crate::plant::sweep::{case_units, sweep_folder};
 use crate::progress::{Progress, ProgressBarGuard};
-use crate::sim::ensemble::{FIGURES, figure};
-use crate::sim::sweep::{Factor, SweepGrid, SweepResult, run_sweep};
+use crate::sim::sweep::{SweepGrid, run_sweep_cases};
 use crate::sim::{Level, SimOptions};
 use anyhow::{Context, anyhow};
 use std::io::Write;
@@ -43,6 +48,10 @@ pub struct Args {
     /// Print the JSON table on stdout as well.
     #[arg(long)]
     pub json: bool,
+    /// Run only shard K of N (K from 0) of the grid's cases; default from the
+    /// cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -81,33 +90,50 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         ..SimOptions::default()
     };
     opts.validate()?;
-    // The report is staged and replaces an older one only when complete.
-    let mut report = crate::output::Report::new_in(&args.out)?;
-    let progress = Progress::new(grid.len() as u64);
+    let shard = Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    let part = split_list(shard, case_units(&grid), Clone::clone);
+    let keep: std::collections::BTreeSet<usize> = part.orders.iter().map(|&o| o as usize).collect();
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} of {} cases", keep.len(), grid.len());
+    }
+    let progress = Progress::new(keep.len() as u64);
     let result = {
         let _bar = ProgressBarGuard::start(progress.clone(), "sweep");
-        run_sweep(&base, &grid, &opts, &progress)
+        run_sweep_cases(&base, &grid, &opts, &|i| keep.contains(&i), &progress)
     };
-    // Write every result we have, then the charts.
+    // Every result we have, then the charts; staged and committed together
+    // (an older report is replaced only when all are complete).
+    let header = (!shard.is_whole()).then(|| {
+        let settings = format!(
+            "base {}; grid {}; {:?}; charts {}",
+            serde_json::to_string(&base).unwrap_or_default(),
+            serde_json::to_string(&grid).unwrap_or_default(),
+            opts,
+            !args.no_charts
+        );
+        (
+            Header::new(
+                Job::Sweep,
+                shard,
+                part.units,
+                part.digest.clone(),
+                &settings,
+            ),
+            part.orders.as_slice(),
+        )
+    });
+    let files = sweep_folder(&result, !args.no_charts, header)?;
+    let written = crate::vision::report::write_files(&args.out, &files, &[])
+        .map_err(anyhow::Error::msg)
+        .with_context(|| format!("writing the sweep into {}", args.out.display()))?;
     let csv_path = args.out.join("sweep.csv");
-    let mut csv = Vec::new();
-    write_csv(&mut csv, &result).with_context(|| format!("writing {}", csv_path.display()))?;
-    report.add("sweep.csv", &csv)?;
     let json_path = args.out.join("sweep.json");
-    let json = serde_json::to_string_pretty(&result)?;
-    report.add("sweep.json", json.as_bytes())?;
-    let mut charts = Vec::new();
-    if !args.no_charts {
-        for f in Factor::ALL {
-            let name = format!("curves_{}.png", f.name());
-            let png = render_png(&result.curve_panels(f), 2, 1600, 1100)?;
-            charts.push(report.add(&name, &png)?);
-            let name = format!("bars_{}.png", f.name());
-            let png = render_png(&result.bar_panels(f), 2, 1400, 550)?;
-            charts.push(report.add(&name, &png)?);
-        }
-    }
-    report.commit()?;
+    let json = String::from_utf8_lossy(&files[1].1).into_owned();
+    let charts: Vec<PathBuf> = written
+        .iter()
+        .filter(|f| f.ends_with(".png"))
+        .map(PathBuf::from)
+        .collect();
     if args.json {
         outln!("{json}")?;
     } else {
@@ -177,56 +203,4 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
-}
-
-/// A grid value in a CSV cell: as written, but in exponent form far from 1
-/// (a refused 1e-300 is not 300 zeros).
-fn csv_num(x: f64) -> String {
-    if x != 0.0 && !(1e-4..1e16).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
-}
-
-fn write_csv(f: &mut Vec<u8>, r: &SweepResult) -> anyhow::Result<()> {
-    write!(f, "clearance_mm,motor_rpm,material,status")?;
-    for name in FIGURES {
-        write!(f, ",{name}")?;
-    }
-    writeln!(f, ",n_impacts,steps,rejected_steps,rhs_evals,wall_ms,error")?;
-    for c in &r.cases {
-        write!(
-            f,
-            "{},{},{},{}",
-            csv_num(c.clearance_mm),
-            csv_num(c.motor_rpm),
-            c.material,
-            if c.error.is_some() { "error" } else { "ok" }
-        )?;
-        for name in FIGURES {
-            match &c.summary {
-                Some(s) => {
-                    let v = figure(s, name);
-                    if v.is_finite() {
-                        write!(f, ",{v}")?
-                    } else {
-                        write!(f, ",")?
-                    }
-                }
-                None => write!(f, ",")?,
-            }
-        }
-        match &c.summary {
-            Some(s) => write!(
-                f,
-                ",{},{},{},{},{:.3}",
-                s.n_impacts, s.steps, s.rejected_steps, s.rhs_evals, s.wall_ms
-            )?,
-            None => write!(f, ",,,,,")?,
-        }
-        let err = c.error.as_deref().unwrap_or("").replace(['"', '\n'], " ");
-        writeln!(f, ",\"{err}\"")?;
-    }
-    Ok(())
 }

@@ -6,11 +6,17 @@
 //! The cache of calibrations (by file SHA-256) is `--cache FILE`, else
 //! `DIR/trend-cache.json` with `--out`; without either nothing is kept.
 //! `--out DIR` writes trend.json, history.csv, trend.md and trend.png
-//! (together, atomically). Exit code 3 when a log was left out (listed with
+//! (together, atomically). `--shard k/n` calibrates one part of the sorted
+//! logs; with `--out` the shard writes `partial.json` and `pinsight merge`
+//! fits, limits and forecasts every shard's points (`plant::trend`).
+//! Exit code 3 when a log was left out (listed with
 //! its error; the others are still reported).
 
 use crate::cli::common::outln;
 use crate::engine::trend::{TrendCache, TrendOptions, run_trend};
+use crate::plant::partial::{Header, Job};
+use crate::plant::shard::Shard;
+use crate::plant::trend::{TrendSettings, split_inputs, trend_folder};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::wear::WearModel;
 use anyhow::anyhow;
@@ -61,6 +67,10 @@ pub struct Args {
     /// Simulated revolutions per clearance of the calibration's coarse grid.
     #[arg(long, default_value_t = 48, value_parser = super::common::bounds::calibrate_revs)]
     pub revs: usize,
+    /// Run only shard K of N (K from 0) of the sorted logs; default from the
+    /// cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub log_read: super::common::LogReadArgs,
 }
@@ -97,20 +107,38 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(p) => TrendCache::load(p).map_err(anyhow::Error::msg)?,
         None => TrendCache::default(),
     };
+    let shard = Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
+    let part = split_inputs(shard, &args.inputs);
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} log(s)", part.inputs.len());
+    }
+    let inputs = if shard.is_whole() {
+        args.inputs.clone()
+    } else {
+        part.inputs.clone()
+    };
     let progress = Progress::new(0);
     let report = {
         let _bar = (!args.json).then(|| ProgressBarGuard::start(progress.clone(), "trend"));
-        run_trend(&args.inputs, &opts, &mut cache, &progress)
+        run_trend(&inputs, &opts, &mut cache, &progress)
     };
     if let Some(dir) = &args.out {
-        let mut rep = crate::output::Report::new_in(dir)?;
-        rep.add("trend.json", &serde_json::to_vec_pretty(&report)?)?;
-        rep.add("history.csv", report.to_csv().as_bytes())?;
-        rep.add("trend.md", report.to_markdown().as_bytes())?;
-        if !report.heads.is_empty() {
-            rep.add("trend.png", &report.to_png()?)?;
-        }
-        rep.commit()?;
+        let settings = TrendSettings::of(&opts);
+        let header = (!shard.is_whole()).then(|| {
+            let text = format!(
+                "{}; revs {}; load {:?}",
+                serde_json::to_string(&settings).unwrap_or_default(),
+                args.revs,
+                opts.load
+            );
+            (
+                Header::new(Job::Trend, shard, part.units, part.digest.clone(), &text),
+                &part,
+                &settings,
+            )
+        });
+        let files = trend_folder(&report, header).map_err(anyhow::Error::msg)?;
+        crate::vision::report::write_files(dir, &files, &[]).map_err(anyhow::Error::msg)?;
     }
     if let Some(p) = &cache_path
         && report.calibrated > 0

@@ -9,15 +9,21 @@
 //! otherwise it prints the Markdown report. Images that cannot be read or
 //! analysed are `error`: listed, counted beside the yield, never dropped.
 //!
+//! `--items` chooses the per-item outputs: the items in `yield.json`,
+//! `items.csv` + `pins.csv` (the default, `json,csv`), and the Parquet
+//! tables `images` and `pins` (`parquet`); `--partition-by part,lot` writes
+//! the tables as hive-style partition folders (docs/scale.md).
+//!
 //! With `--shard k/n` and `--out`, the shard also writes `partial.json`
-//! for `pinsight merge` (`plant::merge`).
+//! for `pinsight merge` (`plant::yields`).
 //!
 //! Exit status: 0 done, 3 done but some images were errors, 2 the command
 //! itself failed.
 
 use crate::cli::common::{outln, outp};
 use crate::engine::vision::{YieldInput, run_yield_inputs};
-use crate::plant::merge::{self, YieldPartial};
+use crate::plant::partial::{Header, Job};
+use crate::plant::yields::{YieldOutputs, settings_text, yield_folder};
 use crate::progress::{Progress, ProgressBarGuard};
 use crate::vision::batch::{self, ItemStatus, RecipeBook};
 use crate::vision::report::{self, GroupBy};
@@ -52,6 +58,14 @@ pub struct Args {
     /// SLURM_ARRAY_TASK_ID + SLURM_ARRAY_TASK_COUNT (docs/scale.md).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
+    /// Per-item outputs with --out: any of json (the items in yield.json), csv (items.csv,
+    /// pins.csv), parquet (images and pins tables, zstd), or none.
+    #[arg(long, value_name = "LIST", default_value = "json,csv")]
+    pub items: String,
+    /// Write the Parquet tables as hive-style partition folders by these keys (part, lot,
+    /// rig), e.g. part,lot; implies parquet in --items.
+    #[arg(long, value_name = "KEYS")]
+    pub partition_by: Option<String>,
     /// Also write every inspected image with its annotations as MCAP for Foxglove.
     #[arg(long, value_name = "FILE")]
     pub mcap: Option<PathBuf>,
@@ -79,7 +93,20 @@ fn write_mcap(
     Ok(())
 }
 
+/// `--items` and `--partition-by` as the folder's outputs.
+pub fn outputs_of(items: &str, partition_by: Option<&str>) -> anyhow::Result<YieldOutputs> {
+    let mut o = YieldOutputs::parse_items(items).map_err(anyhow::Error::msg)?;
+    if let Some(k) = partition_by {
+        o.parquet = Some(
+            crate::export::parquet::parse_partition_keys(k)
+                .map_err(|e| anyhow::anyhow!("--partition-by: {e}"))?,
+        );
+    }
+    Ok(o)
+}
+
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let outputs = outputs_of(&args.items, args.partition_by.as_deref())?;
     let book = RecipeBook::load(&args.recipe);
     for e in &book.invalid {
         eprintln!("warning: {e}");
@@ -125,36 +152,26 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     );
     match &args.out {
         Some(dir) => {
-            // Each item's lines with its place in the whole batch; a shard
-            // adds its partial result for `pinsight merge`.
-            let records = results
-                .iter()
-                .zip(&orders)
-                .map(|(r, &o)| report::ItemRecord::of(o, r))
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(anyhow::Error::msg)?;
-            let mut extra = Vec::new();
-            if !shard.is_whole() {
+            // The folder's files; a shard adds its partial result for
+            // `pinsight merge` (its aggregate and an index of its items).
+            let shard_part = (!shard.is_whole()).then(|| {
                 let mut aggregate = YieldAcc::new(args.by);
                 for (r, &o) in results.iter().zip(&orders) {
                     aggregate.add(o, r);
                 }
-                let partial = YieldPartial {
-                    format: merge::FORMAT.into(),
+                let header = Header::new(
+                    Job::Yield,
                     shard,
-                    units: part.units,
-                    digest: part.digest.clone(),
-                    title: title.clone(),
-                    aggregate,
-                    items: records.clone(),
-                };
-                extra.push((
-                    merge::PARTIAL_FILE.to_string(),
-                    serde_json::to_vec(&partial)?,
-                ));
-            }
-            let files = report::write_records(dir, &rep, &records, &title, &extra)
-                .map_err(anyhow::Error::msg)?;
+                    part.units,
+                    part.digest.clone(),
+                    &settings_text(&book, args.by, &outputs),
+                );
+                (header, aggregate)
+            });
+            let (files, remove) =
+                yield_folder(&rep, &results, &orders, &title, &outputs, shard_part)
+                    .map_err(anyhow::Error::msg)?;
+            let files = report::write_files(dir, &files, &remove).map_err(anyhow::Error::msg)?;
             outln!("{}", rep.summary_line())?;
             for e in &rep.error_list {
                 outln!("error: {}: {}", e.name, e.message)?;

@@ -285,6 +285,33 @@ pub fn run_trend(
             }),
         }
     }
+    // Errors in the order of the logs (the named inputs that are not logs
+    // after them), whichever step found them: a sharded run's merge lists
+    // them in the same order (`plant::trend`).
+    let place: BTreeMap<String, usize> = files
+        .iter()
+        .map(|f| f.display().to_string())
+        .enumerate()
+        .map(|(i, f)| (f, i))
+        .collect();
+    errors.sort_by_key(|e| place.get(&e.file).copied().unwrap_or(usize::MAX));
+    trend_report(points, errors, files.len(), calibrated, cached, opts, start)
+}
+
+/// The report of calibrated history points (any order) and the logs left
+/// out (in the order to list them): grouped into heads, each fitted,
+/// limited and forecast. `logs`, `calibrated`, `cached` are the counts to
+/// report; `start` when the run began (for `wall_ms`). The second half of
+/// [`run_trend`], and the merge of a sharded trend (`plant::trend`).
+pub fn trend_report(
+    points: Vec<HistoryPoint>,
+    errors: Vec<ItemError>,
+    logs: usize,
+    calibrated: usize,
+    cached: usize,
+    opts: &TrendOptions,
+    start: Instant,
+) -> TrendReport {
     let mut groups: BTreeMap<String, Vec<HistoryPoint>> = BTreeMap::new();
     for p in points {
         let key = if opts.by_rig {
@@ -301,7 +328,7 @@ pub fn run_trend(
     TrendReport {
         model: opts.model,
         level: opts.level,
-        logs: files.len(),
+        logs,
         calibrated,
         cached,
         errors,

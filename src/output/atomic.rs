@@ -78,6 +78,19 @@ fn sync_dir(dir: &Path) -> Result<(), OutputError> {
         .map_err(|e| OutputError::io(dir, e))
 }
 
+/// fsyncs a folder and every folder below it (a staged data set's
+/// partition folders), deepest first.
+fn sync_tree(dir: &Path) -> Result<(), OutputError> {
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                sync_tree(&e.path())?;
+            }
+        }
+    }
+    sync_dir(dir)
+}
+
 /// Writes `bytes` to a new temporary `tmp` and fsyncs it; on failure the
 /// temporary is removed.
 fn stage(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
@@ -245,6 +258,9 @@ pub struct Report {
     /// File names staged, in the order added (the last add of a name wins).
     staged: Vec<String>,
     staged_bytes: u64,
+    /// Entries of `--out` the commit removes (an output this run does not
+    /// write again in that form, e.g. a partitioned folder now one file).
+    removed: Vec<String>,
 }
 
 /// The marker a staging folder named `.X{TMP_MARK}SUFFIX` holds.
@@ -322,6 +338,7 @@ impl Report {
                     mode: CommitMode::Switch,
                     staged: Vec::new(),
                     staged_bytes: 0,
+                    removed: Vec::new(),
                 });
             }
         }
@@ -334,6 +351,7 @@ impl Report {
             mode: CommitMode::Renames,
             staged: Vec::new(),
             staged_bytes: 0,
+            removed: Vec::new(),
         })
     }
 
@@ -348,23 +366,46 @@ impl Report {
         self.mode
     }
 
-    /// Stages `name` (a file name in the report's folder) with `bytes`.
+    /// Stages `name` (a file name in the report's folder, or a path of
+    /// plain names below it, `images/part=A/data.parquet`) with `bytes`.
     /// Adding the same name twice keeps the last.
+    ///
+    /// A nested file makes its top folder (`images/`) part of the report:
+    /// the commit replaces that whole folder (a partitioned data set
+    /// written again leaves no partition of the old run behind).
     pub fn add(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf, OutputError> {
         let final_path = self.dir.join(name);
-        if name.is_empty()
-            || name.contains(TMP_MARK)
-            || Path::new(name).file_name() != Some(std::ffi::OsStr::new(name))
+        let plain = |n: &str| {
+            !n.is_empty()
+                && n != "."
+                && n != ".."
+                && !n.contains(TMP_MARK)
+                && Path::new(n).file_name() == Some(std::ffi::OsStr::new(n))
+        };
+        if name.is_empty() || !name.split('/').all(plain) {
+            return Err(OutputError::io(
+                &final_path,
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    "a report file name must be a plain name (or a path of plain names) inside the output folder",
+                ),
+            ));
+        }
+        if let Some(top) = name.split_once('/').map(|(t, _)| t)
+            && self.staged.iter().any(|s| s == top)
         {
             return Err(OutputError::io(
                 &final_path,
                 std::io::Error::new(
                     std::io::ErrorKind::InvalidInput,
-                    "a report file name must be a plain name inside the output folder",
+                    format!("`{top}` is staged as a file of the report, not a folder"),
                 ),
             ));
         }
         let tmp = self.stage.join(name);
+        if let Some(parent) = tmp.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| OutputError::io(&final_path, e))?;
+        }
         if let Some(i) = self.staged.iter().position(|n| n == name) {
             self.staged.remove(i);
             let _ = std::fs::remove_file(&tmp);
@@ -378,6 +419,25 @@ impl Report {
         self.staged_bytes += bytes.len() as u64;
         self.staged.push(name.to_string());
         Ok(final_path)
+    }
+
+    /// Marks `name`, a top-level file or folder of `--out`, to be removed
+    /// by the commit (nothing happens to it before). A name also staged
+    /// is written, not removed.
+    pub fn remove(&mut self, name: &str) {
+        if !self.removed.iter().any(|r| r == name) {
+            self.removed.push(name.to_string());
+        }
+    }
+
+    /// Removed entries that the report does not write again.
+    fn to_remove(&self) -> Vec<String> {
+        let tops = self.tops();
+        self.removed
+            .iter()
+            .filter(|r| !tops.contains(&r.as_str()))
+            .cloned()
+            .collect()
     }
 
     /// Puts the staged files in place and fsyncs; returns the files
@@ -402,11 +462,44 @@ impl Report {
         self.commit_with_mode().map(|(files, _)| files)
     }
 
-    /// Renames every staged file into the folder, then fsyncs it.
+    /// The top-level entries of `--out` the report writes (files, and the
+    /// top folders of nested files), each once, in the order first added.
+    fn tops(&self) -> Vec<&str> {
+        let mut v: Vec<&str> = Vec::new();
+        for n in &self.staged {
+            let top = n.split('/').next().unwrap_or(n);
+            if !v.contains(&top) {
+                v.push(top);
+            }
+        }
+        v
+    }
+
+    /// Renames every staged file into the folder, then fsyncs it. A staged
+    /// folder replaces the old one of that name: the old is removed first
+    /// (a kill between leaves the folder absent, never a mix of runs).
     fn renames(&mut self) -> Result<(), OutputError> {
-        for name in &self.staged {
-            let fin = self.dir.join(name);
-            std::fs::rename(self.stage.join(name), &fin).map_err(|e| OutputError::io(&fin, e))?;
+        for r in self.to_remove() {
+            let p = self.dir.join(&r);
+            let gone = match std::fs::symlink_metadata(&p) {
+                Err(_) => Ok(()),
+                Ok(m) if m.is_dir() => std::fs::remove_dir_all(&p),
+                Ok(_) => std::fs::remove_file(&p),
+            };
+            gone.map_err(|e| OutputError::io(&p, e))?;
+        }
+        for top in self.tops() {
+            let fin = self.dir.join(top);
+            let src = self.stage.join(top);
+            if src.is_dir() {
+                // Staged folders hold their files' fsynced data; the
+                // folders themselves are synced here before the move.
+                sync_tree(&src)?;
+                if std::fs::symlink_metadata(&fin).is_ok_and(|m| m.is_dir()) {
+                    std::fs::remove_dir_all(&fin).map_err(|e| OutputError::io(&fin, e))?;
+                }
+            }
+            std::fs::rename(&src, &fin).map_err(|e| OutputError::io(&fin, e))?;
         }
         sync_dir(&self.dir)
     }
@@ -419,13 +512,17 @@ impl Report {
             return Ok(false);
         };
         let mut carried = 0usize;
+        let tops: Vec<String> = self.tops().into_iter().map(str::to_string).collect();
+        let mut tops: Vec<&str> = tops.iter().map(String::as_str).collect();
+        let removed = self.to_remove();
+        tops.extend(removed.iter().map(String::as_str));
         for e in rd {
             let Ok(e) = e else { return Ok(false) };
             let name = e.file_name();
             let Some(n) = name.to_str() else {
                 return Ok(false);
             };
-            if n.contains(TMP_MARK) || self.staged.iter().any(|s| s == n) {
+            if n.contains(TMP_MARK) || tops.contains(&n) {
                 continue;
             }
             carried += 1;
@@ -444,7 +541,7 @@ impl Report {
         if let Ok(meta) = std::fs::metadata(&self.dir) {
             let _ = std::fs::set_permissions(&self.stage, meta.permissions());
         }
-        if sync_dir(&self.stage).is_err() {
+        if sync_tree(&self.stage).is_err() {
             return Ok(false);
         }
         let cwd = rustix::fs::CWD;
@@ -461,6 +558,14 @@ impl Report {
         }
         // From here `self.stage` names the old folder, `self.dir` the new.
         let _ = std::fs::remove_file(self.dir.join(&self.marker));
+        for r in &removed {
+            let old = self.stage.join(r);
+            let _ = if old.is_dir() {
+                std::fs::remove_dir_all(&old)
+            } else {
+                std::fs::remove_file(&old)
+            };
+        }
         let left = restore_missing(&self.stage, &self.dir);
         sync_dir(&self.dir)?;
         if let Some(p) = self.stage.parent() {
@@ -563,237 +668,5 @@ fn sweep_stale(dir: &Path) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn names(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
-
-    #[test]
-    fn write_file_replaces_and_leaves_no_temporary() {
-        let d = tempfile::tempdir().unwrap();
-        let p = d.path().join("a.json");
-        write_file(&p, b"old").unwrap();
-        write_file(&p, b"new").unwrap();
-        assert_eq!(std::fs::read(&p).unwrap(), b"new");
-        assert_eq!(names(d.path()), vec!["a.json"]);
-        // A folder that does not exist yet is created.
-        let q = d.path().join("sub/b.csv");
-        write_file(&q, b"x").unwrap();
-        assert_eq!(std::fs::read(&q).unwrap(), b"x");
-    }
-
-    #[test]
-    fn report_dropped_before_commit_keeps_the_old_files() {
-        let d = tempfile::tempdir().unwrap();
-        let mut r = Report::new_in(d.path()).unwrap();
-        r.add("a", b"1").unwrap();
-        r.add("b", b"1").unwrap();
-        r.commit().unwrap();
-        let mut r = Report::new_in(d.path()).unwrap();
-        r.add("a", b"2").unwrap();
-        drop(r); // an error while producing "b"
-        assert_eq!(std::fs::read(d.path().join("a")).unwrap(), b"1");
-        assert_eq!(std::fs::read(d.path().join("b")).unwrap(), b"1");
-        assert_eq!(names(d.path()), vec!["a", "b"]);
-    }
-
-    #[test]
-    fn commit_writes_every_file_and_names_them() {
-        let d = tempfile::tempdir().unwrap();
-        let mut r = Report::new_in(d.path()).unwrap();
-        r.add("x.json", b"{}").unwrap();
-        r.add("y.csv", b"a\n").unwrap();
-        r.add("x.json", b"[]").unwrap();
-        let files = r.commit().unwrap();
-        assert_eq!(files, vec![d.path().join("y.csv"), d.path().join("x.json")]);
-        assert_eq!(std::fs::read(d.path().join("x.json")).unwrap(), b"[]");
-        assert_eq!(names(d.path()), vec!["x.json", "y.csv"]);
-    }
-
-    #[test]
-    fn names_that_leave_the_folder_are_refused() {
-        let d = tempfile::tempdir().unwrap();
-        let mut r = Report::new_in(d.path()).unwrap();
-        for bad in ["../x", "a/b", "", ".."] {
-            assert!(r.add(bad, b"1").is_err(), "{bad}");
-        }
-    }
-
-    #[test]
-    fn stale_temporaries_of_dead_processes_are_swept() {
-        let d = tempfile::tempdir().unwrap();
-        // pid 0 is never a user process: its temporaries are stale.
-        let stale = d.path().join(format!(".a{TMP_MARK}0.7"));
-        std::fs::write(&stale, b"half").unwrap();
-        let mine = temp_path(d.path(), "b");
-        std::fs::write(&mine, b"busy").unwrap();
-        let _r = Report::new_in(d.path()).unwrap();
-        assert!(!stale.exists());
-        assert!(mine.exists(), "a live process's temporary is kept");
-    }
-
-    #[test]
-    fn disk_full_names_the_file_and_the_space() {
-        // A real full filesystem: /dev/full fails every write with ENOSPC
-        // (Linux); we cannot create a temporary there, so check the error
-        // mapping on the errno the kernel gives.
-        let e = stage_error(
-            Path::new("/out/yield.json"),
-            Path::new("/"),
-            2_500_000,
-            std::io::Error::from_raw_os_error(28),
-        );
-        let msg = e.to_string();
-        assert!(msg.contains("/out/yield.json"), "{msg}");
-        assert!(msg.contains("needed 2500000 bytes"), "{msg}");
-        assert!(matches!(e, OutputError::DiskFull { .. }));
-    }
-
-    #[test]
-    fn a_switch_keeps_everything_else_in_the_folder() {
-        let d = tempfile::tempdir().unwrap();
-        let out = d.path().join("out");
-        std::fs::create_dir_all(out.join("sub")).unwrap();
-        std::fs::write(out.join("sub/keep.txt"), b"mine").unwrap();
-        std::fs::write(out.join("notes.txt"), b"user").unwrap();
-        std::fs::write(out.join("a.json"), b"old").unwrap();
-        let mut r = Report::new_in(&out).unwrap();
-        assert_eq!(r.mode(), CommitMode::Switch);
-        r.add("a.json", b"new").unwrap();
-        r.add("b.csv", b"x").unwrap();
-        let (_, mode) = r.commit_with_mode().unwrap();
-        assert_eq!(mode, CommitMode::Switch);
-        assert_eq!(names(&out), vec!["a.json", "b.csv", "notes.txt", "sub"]);
-        assert_eq!(std::fs::read(out.join("a.json")).unwrap(), b"new");
-        assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"user");
-        assert_eq!(std::fs::read(out.join("sub/keep.txt")).unwrap(), b"mine");
-        // Nothing left beside the folder either.
-        assert_eq!(names(d.path()), vec!["out"]);
-    }
-
-    #[test]
-    fn an_old_folder_left_by_a_killed_switch_gives_back_what_is_missing() {
-        let d = tempfile::tempdir().unwrap();
-        let out = d.path().join("out");
-        std::fs::create_dir_all(&out).unwrap();
-        std::fs::write(out.join("a.json"), b"new").unwrap();
-        // What a switch killed before moving the subfolder back leaves:
-        // the old folder, no marker, under pid 0 (never alive).
-        let old = d.path().join(format!(".out{TMP_MARK}0.3"));
-        std::fs::create_dir_all(old.join("sub")).unwrap();
-        std::fs::write(old.join("sub/keep.txt"), b"mine").unwrap();
-        std::fs::write(old.join("a.json"), b"old").unwrap();
-        // And a staging folder killed while staging (it holds its marker).
-        let stage = d.path().join(format!(".out{TMP_MARK}0.4"));
-        make_stage(&stage).unwrap();
-        std::fs::write(stage.join("a.json"), b"half").unwrap();
-        let r = Report::new_in(&out).unwrap();
-        drop(r);
-        assert_eq!(names(d.path()), vec!["out"]);
-        assert_eq!(names(&out), vec!["a.json", "sub"]);
-        assert_eq!(std::fs::read(out.join("a.json")).unwrap(), b"new");
-        assert_eq!(std::fs::read(out.join("sub/keep.txt")).unwrap(), b"mine");
-    }
-
-    #[test]
-    fn the_current_directory_is_never_switched() {
-        let cwd = std::env::current_dir().unwrap().canonicalize().unwrap();
-        assert!(holds_cwd(&cwd));
-        assert!(holds_cwd(cwd.parent().unwrap()));
-        let d = tempfile::tempdir().unwrap();
-        assert!(!holds_cwd(&d.path().canonicalize().unwrap()));
-    }
-
-    #[test]
-    fn a_link_is_followed_and_kept() {
-        let d = tempfile::tempdir().unwrap();
-        let target = d.path().join("real.csv");
-        std::fs::write(&target, "old").unwrap();
-        let link = d.path().join("link.csv");
-        std::os::unix::fs::symlink("real.csv", &link).unwrap();
-        write_file(&link, b"new").unwrap();
-        assert!(
-            std::fs::symlink_metadata(&link)
-                .unwrap()
-                .file_type()
-                .is_symlink()
-        );
-        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
-        assert_eq!(names(d.path()), ["link.csv", "real.csv"]);
-    }
-
-    #[test]
-    fn permissions_of_the_replaced_file_are_kept() {
-        use std::os::unix::fs::PermissionsExt;
-        let d = tempfile::tempdir().unwrap();
-        let f = d.path().join("a.json");
-        std::fs::write(&f, "old").unwrap();
-        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
-        write_file(&f, b"new").unwrap();
-        let mode = std::fs::metadata(&f).unwrap().permissions().mode() & 0o777;
-        assert_eq!(mode, 0o600);
-    }
-
-    #[test]
-    fn a_named_pipe_is_written_through_not_replaced() {
-        let d = tempfile::tempdir().unwrap();
-        let fifo = d.path().join("pipe");
-        rustix::fs::mknodat(
-            rustix::fs::CWD,
-            &fifo,
-            rustix::fs::FileType::Fifo,
-            rustix::fs::Mode::from_raw_mode(0o600),
-            0,
-        )
-        .unwrap();
-        let reader = {
-            let fifo = fifo.clone();
-            std::thread::spawn(move || std::fs::read(fifo).unwrap())
-        };
-        write_file(&fifo, b"through the pipe").unwrap();
-        assert_eq!(reader.join().unwrap(), b"through the pipe");
-        let ft = std::fs::symlink_metadata(&fifo).unwrap().file_type();
-        assert!(std::os::unix::fs::FileTypeExt::is_fifo(&ft));
-        assert_eq!(names(d.path()), ["pipe"]);
-    }
-
-    #[test]
-    fn a_folder_is_not_a_file_and_a_file_is_not_a_folder() {
-        let d = tempfile::tempdir().unwrap();
-        let e = write_file(d.path(), b"x").unwrap_err().to_string();
-        assert!(e.contains("is a folder"), "{e}");
-        let f = d.path().join("plain");
-        std::fs::write(&f, "mine").unwrap();
-        let e = Report::new_in(&f).unwrap_err().to_string();
-        assert!(e.contains("not a folder") && e.contains("plain"), "{e}");
-        assert_eq!(std::fs::read_to_string(&f).unwrap(), "mine");
-    }
-
-    #[test]
-    fn a_report_into_a_linked_folder_keeps_the_link() {
-        let d = tempfile::tempdir().unwrap();
-        let real = d.path().join("real");
-        std::fs::create_dir(&real).unwrap();
-        std::fs::write(real.join("old.txt"), "keep").unwrap();
-        let link = d.path().join("out");
-        std::os::unix::fs::symlink("real", &link).unwrap();
-        let mut r = Report::new_in(&link).unwrap();
-        r.add("a.json", b"{}").unwrap();
-        r.commit().unwrap();
-        assert!(
-            std::fs::symlink_metadata(&link)
-                .unwrap()
-                .file_type()
-                .is_symlink()
-        );
-        assert_eq!(names(&real), ["a.json", "old.txt"]);
-        assert_eq!(names(d.path()), ["out", "real"]);
-    }
-}
+#[path = "atomic_tests.rs"]
+mod tests;

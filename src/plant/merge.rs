@@ -1,154 +1,139 @@
-//! Partial results of a sharded batch, and their exact merge.
+//! `pinsight merge`: the partials of a sharded job merged into the report
+//! one run over all inputs writes.
 //!
-//! Each shard of `pinsight yield --shard k/n --out DIR` writes, beside its
-//! own report, `partial.json`: the mergeable aggregate of its items
-//! ([`YieldAcc`]: counts for the yield and its Wilson interval, DPPM, the
-//! Pareto, the groups, per-position counts and exact offset sums) and each
-//! item's lines of the per-item outputs with its place in the whole
-//! batch's order. `pinsight merge` adds the aggregates and interleaves the
-//! items back into the batch's order, and writes through the single run's
-//! own writer: the merged folder is byte for byte the folder one run over
-//! all inputs writes (`tests/plant_shard.rs`).
-//!
-//! A merge is refused, naming the files, unless the partials are one job's
-//! complete set: the same input list (its digest and unit count), the same
-//! shard count, recipes' title and grouping, and every shard exactly once.
+//! Every partial is read and its header checked first: one job, one
+//! pinsight version, one input list, one shard count, the same settings
+//! (recipes, options), every shard exactly once (`partial::check_set`),
+//! each refusal naming the files. Then the job's own merge reads and
+//! checks the shards' files and builds the merged folder's files in
+//! memory; nothing is written until all of that succeeded, and then in one
+//! commit (`crate::output`): a refused or failed merge never leaves a half
+//! merged report.
 
-use super::shard::Shard;
-use crate::vision::report::{ItemRecord, YieldReport};
-use crate::vision::yield_acc::YieldAcc;
-use serde::{Deserialize, Serialize};
-use std::path::Path;
+use super::partial::{self, Found, Header, Job, Partial};
+use std::path::PathBuf;
 
-/// The partial's file name in a shard's output folder.
-pub const PARTIAL_FILE: &str = "partial.json";
-
-/// The format tag a partial carries (a newer pinsight that changes the
-/// partial changes the tag, and an old merge refuses it).
-pub const FORMAT: &str = "pinsight-yield-partial/1";
-
-/// The largest partial read (a shard of ~10⁶ images with their pins).
-pub const PARTIAL_MAX_BYTES: u64 = 8 << 30;
-
-/// What one shard hands to the merge.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct YieldPartial {
-    pub format: String,
-    pub shard: Shard,
-    /// Distinct units of the whole batch and the digest of their names.
-    pub units: u64,
-    pub digest: String,
-    /// The report's title (the recipes' part numbers).
-    pub title: String,
-    pub aggregate: YieldAcc,
-    /// This shard's items, in batch order.
-    pub items: Vec<ItemRecord>,
-}
-
-/// A merged batch: the report and the items in batch order.
-#[derive(Debug, Clone)]
+/// A merged job: its folder's files, what to remove of an earlier run,
+/// and what to say.
 pub struct Merged {
-    pub report: YieldReport,
-    pub items: Vec<ItemRecord>,
-    pub title: String,
+    pub job: Job,
     pub shards: u32,
+    pub files: Vec<(String, Vec<u8>)>,
+    pub remove: Vec<String>,
+    /// One line for the terminal.
+    pub summary: String,
+    /// The report printed without `--out` (Markdown or text), and as JSON.
+    pub text: String,
+    pub json: String,
+    /// The exit status a single run of the job would give (0, 1 or 3).
+    pub exit: u8,
 }
 
-/// Reads a partial from its file or from the shard's output folder.
-pub fn read_partial(path: &Path) -> Result<YieldPartial, String> {
-    let file = if path.is_dir() {
-        path.join(PARTIAL_FILE)
-    } else {
-        path.to_path_buf()
+/// Reads, checks and merges the partials named (files or shards' folders).
+pub fn merge_paths(paths: &[PathBuf]) -> Result<Merged, String> {
+    let mut heads: Vec<(Found, Header)> = Vec::new();
+    let mut bytes = Vec::new();
+    for p in paths {
+        let found = partial::locate(p)?;
+        let b = partial::read_bytes(&found)?;
+        let h = partial::read_header(&found, &b)?;
+        heads.push((found, h));
+        bytes.push(b);
+    }
+    let ordered = partial::check_set(&heads)?;
+    let at = |e: &(Found, Header)| {
+        heads
+            .iter()
+            .position(|x| std::ptr::eq(x, e))
+            .expect("an entry of the set")
     };
-    // A device (`/dev/zero`) never ends: only a regular file is a partial.
-    match std::fs::metadata(&file) {
-        Ok(m) if !m.is_file() => return Err(format!("{}: not a regular file", file.display())),
-        Err(e) => return Err(format!("{}: {e}", file.display())),
-        Ok(_) => {}
+    let idx: Vec<usize> = ordered.iter().map(|e| at(e)).collect();
+    let job = heads[idx[0]].1.job;
+    let shards = heads[idx[0]].1.shard.n;
+    fn bodies<'a, B: serde::de::DeserializeOwned>(
+        heads: &'a [(Found, Header)],
+        bytes: &[Vec<u8>],
+        idx: &[usize],
+    ) -> Result<Vec<(&'a Found, Partial<B>)>, String> {
+        idx.iter()
+            .map(|&i| Ok((&heads[i].0, partial::read_body(&heads[i].0, &bytes[i])?)))
+            .collect()
     }
-    let bytes = crate::input::read_bounded(&file, PARTIAL_MAX_BYTES)
-        .map_err(|e| format!("{}: {e}", file.display()))?;
-    let p: YieldPartial = serde_json::from_slice(&bytes)
-        .map_err(|e| format!("{}: not a pinsight partial result: {e}", file.display()))?;
-    if p.format != FORMAT {
-        return Err(format!(
-            "{}: partial format `{}`, this pinsight merges `{FORMAT}`",
-            file.display(),
-            p.format
-        ));
-    }
-    Ok(p)
-}
-
-/// Merges one job's partials (each named by where it came from).
-pub fn merge(partials: &[(String, YieldPartial)]) -> Result<Merged, String> {
-    let Some((first_src, first)) = partials.first() else {
-        return Err("nothing to merge".into());
-    };
-    let n = first.shard.n;
-    let mut seen: Vec<Option<&str>> = vec![None; n as usize];
-    for (src, p) in partials {
-        let differs = |what: &str, a: &dyn std::fmt::Display, b: &dyn std::fmt::Display| {
-            format!("{src}: {what} {a} differs from {first_src}'s {b}: not shards of one job")
-        };
-        if p.shard.n != n {
-            return Err(differs("shard count", &p.shard.n, &n));
+    match job {
+        Job::Yield => {
+            let set = bodies(&heads, &bytes, &idx)?;
+            drop(bytes);
+            let m = super::yields::merge_yield(&set)?;
+            let title = set[0].1.body.title.clone();
+            Ok(Merged {
+                job,
+                shards,
+                summary: m.report.summary_line(),
+                text: m.report.markdown(&title, &[]),
+                json: serde_json::to_string_pretty(&m.report).map_err(|e| e.to_string())?,
+                exit: if m.report.errors > 0 { 3 } else { 0 },
+                files: m.files,
+                remove: m.remove,
+            })
         }
-        if p.digest != first.digest || p.units != first.units {
-            return Err(differs(
-                "input list",
-                &format!("({} units)", p.units),
-                &format!("({} units)", first.units),
-            ));
+        Job::Monitor => {
+            let set = bodies(&heads, &bytes, &idx)?;
+            drop(bytes);
+            let m = super::monitor::merge_monitor(set)?;
+            let r = &m.run;
+            Ok(Merged {
+                job,
+                shards,
+                summary: format!(
+                    "{} logs: {} cycles OK, {} NOK, {} not evaluated",
+                    r.logs.len(),
+                    r.ok,
+                    r.nok,
+                    r.not_evaluated
+                ),
+                text: crate::process::report::summary_text(r),
+                json: serde_json::to_string_pretty(r).map_err(|e| e.to_string())?,
+                exit: super::monitor::exit_status(r),
+                files: m.files,
+                remove: m.remove,
+            })
         }
-        if p.title != first.title {
-            return Err(differs("title", &p.title, &first.title));
+        Job::Trend => {
+            let set = bodies(&heads, &bytes, &idx)?;
+            drop(bytes);
+            let m = super::trend::merge_trend(set)?;
+            let r = &m.report;
+            Ok(Merged {
+                job,
+                shards,
+                summary: format!(
+                    "{} logs, {} heads, {} left out",
+                    r.logs,
+                    r.heads.len(),
+                    r.errors.len()
+                ),
+                text: r.to_markdown(),
+                json: serde_json::to_string_pretty(r).map_err(|e| e.to_string())?,
+                exit: if r.errors.is_empty() { 0 } else { 3 },
+                files: m.files,
+                remove: Vec::new(),
+            })
         }
-        if p.aggregate.group_by != first.aggregate.group_by {
-            return Err(differs(
-                "grouping",
-                &format!("{:?}", p.aggregate.group_by),
-                &format!("{:?}", first.aggregate.group_by),
-            ));
+        Job::Sweep => {
+            let set = bodies(&heads, &bytes, &idx)?;
+            drop(bytes);
+            let m = super::sweep::merge_sweep(set)?;
+            let r = &m.result;
+            Ok(Merged {
+                job,
+                shards,
+                summary: format!("{} cases, {} failed", r.cases.len(), r.failed),
+                text: String::from_utf8_lossy(&m.files[0].1).into_owned(),
+                json: String::from_utf8_lossy(&m.files[1].1).into_owned(),
+                exit: u8::from(r.failed > 0),
+                files: m.files,
+                remove: Vec::new(),
+            })
         }
-        let slot = &mut seen[p.shard.k as usize];
-        if let Some(other) = slot {
-            return Err(format!("shard {} given twice: {other} and {src}", p.shard));
-        }
-        *slot = Some(src);
     }
-    let missing: Vec<String> = seen
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.is_none())
-        .map(|(k, _)| format!("{k}/{n}"))
-        .collect();
-    if !missing.is_empty() {
-        return Err(format!(
-            "shard(s) {} missing: a merge needs every shard of the job",
-            missing.join(", ")
-        ));
-    }
-    let mut acc = first.aggregate.clone();
-    for (_, p) in &partials[1..] {
-        acc.merge(&p.aggregate);
-    }
-    let mut items: Vec<ItemRecord> = partials
-        .iter()
-        .flat_map(|(_, p)| p.items.iter().cloned())
-        .collect();
-    items.sort_by_key(|r| r.order);
-    if let Some(w) = items.windows(2).find(|w| w[0].order == w[1].order) {
-        return Err(format!(
-            "two items at place {} of the batch: the partials overlap",
-            w[0].order
-        ));
-    }
-    Ok(Merged {
-        report: acc.report(),
-        items,
-        title: first.title.clone(),
-        shards: n,
-    })
 }

@@ -178,20 +178,13 @@ pub struct ShardPart {
 
 /// [`split_collected`] with the positions and the batch's identity.
 pub fn split_collected_part(shard: Shard, items: Vec<Item>, errors: Vec<ItemResult>) -> ShardPart {
-    use sha2::Digest;
     let units: Vec<String> = errors
         .iter()
         .map(unit_of_result)
         .chain(items.iter().map(unit_of_item))
         .map(str::to_string)
         .collect();
-    let distinct: std::collections::BTreeSet<&str> = units.iter().map(String::as_str).collect();
-    let mut h = sha2::Sha256::new();
-    for u in &distinct {
-        h.update(u.as_bytes());
-        h.update(b"\n");
-    }
-    let digest: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    let (n_units, digest) = units_digest(&units);
     let keep = shard.select(&units);
     let (ke, ki) = keep.split_at(errors.len());
     let e0 = errors.len();
@@ -211,7 +204,54 @@ pub fn split_collected_part(shard: Shard, items: Vec<Item>, errors: Vec<ItemResu
         items,
         errors,
         orders,
-        units: distinct.len() as u64,
+        units: n_units,
+        digest,
+    }
+}
+
+/// The identity of a list of units: their number and the SHA-256 (hex) of
+/// the sorted distinct names, one per line.
+pub fn units_digest<S: AsRef<str>>(units: &[S]) -> (u64, String) {
+    use sha2::Digest;
+    let distinct: std::collections::BTreeSet<&str> = units.iter().map(|u| u.as_ref()).collect();
+    let mut h = sha2::Sha256::new();
+    for u in &distinct {
+        h.update(u.as_bytes());
+        h.update(b"\n");
+    }
+    let digest = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    (distinct.len() as u64, digest)
+}
+
+/// A shard's part of any list of inputs (logs, grid cases …): the kept
+/// entries in the list's order, each one's place in the whole list, and
+/// the whole list's identity.
+#[derive(Debug)]
+pub struct Part<T> {
+    pub kept: Vec<T>,
+    pub orders: Vec<u64>,
+    pub units: u64,
+    pub digest: String,
+}
+
+/// Keeps this shard's entries of `list`; `unit` names an entry's unit
+/// (entries with one name go to one shard).
+pub fn split_list<T>(shard: Shard, list: Vec<T>, unit: impl Fn(&T) -> String) -> Part<T> {
+    let units: Vec<String> = list.iter().map(&unit).collect();
+    let (n, digest) = units_digest(&units);
+    let keep = shard.select(&units);
+    let mut kept = Vec::new();
+    let mut orders = Vec::new();
+    for (i, (t, k)) in list.into_iter().zip(keep).enumerate() {
+        if k {
+            kept.push(t);
+            orders.push(i as u64);
+        }
+    }
+    Part {
+        kept,
+        orders,
+        units: n,
         digest,
     }
 }

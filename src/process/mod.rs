@@ -20,6 +20,7 @@
 //! - [`pin_spc`]: the SPC of the pins' positions on the connectors'
 //!   photographs (dx, dy, radial offset, true position = 2 × offset,
 //!   side-view height);
+//! - [`serde_back`]: reading a run back from JSON (for `pinsight merge`);
 //! - [`spc`]: capability (Cp, Cpk, Pp, Ppk), X̄/R and I-MR charts, the
 //!   Western Electric rules.
 //!
@@ -35,6 +36,7 @@ pub mod qdas;
 pub mod recipe;
 pub mod report;
 pub mod run;
+pub mod serde_back;
 pub mod spc;
 pub mod story;
 pub mod synth;

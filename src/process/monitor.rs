@@ -8,7 +8,7 @@ use super::recipe::{Axis, EnvelopeMode, ProcessRecipe};
 use super::spc::{Capability, ControlChart, capability, control_chart};
 use crate::rig::cycles::CycleSet;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// Least fraction of a cycle's grid with data for it to be evaluated.
@@ -16,7 +16,7 @@ pub const MIN_COVERAGE: f64 = 0.5;
 /// Points of a learned stroke-axis envelope.
 pub const STROKE_ENVELOPE_POINTS: usize = 200;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CycleStatus {
     Ok,
@@ -35,10 +35,11 @@ impl CycleStatus {
 }
 
 /// One cycle's verdict.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CycleVerdict {
     pub index: u64,
     pub t_start_ns: i64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub motor_rpm: f64,
     pub status: CycleStatus,
     /// Why the cycle was not evaluated.
@@ -47,6 +48,7 @@ pub struct CycleVerdict {
     /// The objects that failed, with the reason and by how much.
     pub failed: Vec<ObjectResult>,
     /// Every value check's value (by its name); absent when not computable.
+    #[serde(deserialize_with = "super::serde_back::map_nan")]
     pub values: BTreeMap<String, f64>,
 }
 
@@ -73,27 +75,30 @@ impl CycleVerdict {
 }
 
 /// SPC of one characteristic.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Characteristic {
     pub name: String,
     /// What is measured: a process value's quantity (`peak_force_n` …) or a
     /// pin measure (`pin_dx_mm` …); the Q-DAS characteristic number.
-    pub quantity: &'static str,
-    pub unit: &'static str,
+    #[serde(deserialize_with = "super::serde_back::name")]
+    pub quantity: super::serde_back::Name,
+    #[serde(deserialize_with = "super::serde_back::name")]
+    pub unit: super::serde_back::Name,
     pub capability: Option<Capability>,
     pub chart: Option<ControlChart>,
 }
 
 /// NOK counts per object.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ObjectCount {
-    pub kind: &'static str,
+    #[serde(deserialize_with = "super::serde_back::name")]
+    pub kind: super::serde_back::Name,
     pub name: String,
     pub nok: usize,
 }
 
 /// A log's cycles against the recipe.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MonitorReport {
     pub file: String,
     pub part_number: String,

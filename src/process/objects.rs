@@ -3,13 +3,14 @@
 
 use super::curve::CycleCurve;
 use super::recipe::{Axis, Direction, Envelope, Side, Threshold, ValueCheck, Window};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// What one object found on one cycle.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ObjectResult {
     /// `window`, `threshold`, `envelope` or `value`.
-    pub kind: &'static str,
+    #[serde(deserialize_with = "super::serde_back::name")]
+    pub kind: super::serde_back::Name,
     pub name: String,
     pub ok: bool,
     /// Why it failed, with the numbers.
@@ -17,6 +18,7 @@ pub struct ObjectResult {
     pub reason: Option<String>,
     /// How far outside, in the object's unit (N for force objects, the
     /// value's unit for value checks); 0 when OK.
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub by: f64,
     /// The measured value (value checks).
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -24,10 +24,11 @@
 use super::monitor::Characteristic;
 use super::spc::{capability, control_chart};
 use crate::vision::result::Inspection;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// One pin measured on one connector's photograph.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PinObs {
     pub row: u32,
     pub col: u32,
@@ -43,7 +44,7 @@ pub struct PinObs {
 }
 
 /// The pins one connector's photograph measured, with its cycle.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConnectorPins {
     pub cycle: u64,
     pub t_start_ns: i64,

@@ -6,11 +6,11 @@ use super::monitor::{Characteristic, CycleVerdict, MonitorReport, spc_of};
 use super::pin_spc::{ConnectorPins, pin_characteristics};
 use super::recipe::ProcessRecipe;
 use super::story::{Confusion, StoryReport};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// One log's outcome.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct LogMonitor {
     pub file: String,
     pub lot: Option<String>,

@@ -7,7 +7,7 @@
 //! individuals), σ overall is the sample standard deviation of all values:
 //! the conventions of AIAG's SPC manual, with its constants (d₂, A₂, D₃, D₄).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// d₂, A₂, D₃, D₄ for subgroup sizes 2..=10 (AIAG SPC manual, 2nd ed.).
 const D2: [f64; 9] = [
@@ -24,13 +24,16 @@ const D4: [f64; 9] = [
 ];
 
 /// Capability of one characteristic.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Capability {
     /// Values used (finite ones).
     pub n: usize,
     pub subgroup: usize,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub mean: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub sigma_within: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub sigma_overall: f64,
     pub lsl: Option<f64>,
     pub usl: Option<f64>,
@@ -42,7 +45,7 @@ pub struct Capability {
 }
 
 /// A Western Electric rule broken at a point of a chart.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunAlarm {
     /// 1: beyond 3σ; 2: 2 of 3 beyond 2σ, same side; 3: 4 of 5 beyond 1σ,
     /// same side; 4: 8 in a row on one side of the centre line.
@@ -53,20 +56,29 @@ pub struct RunAlarm {
 }
 
 /// A control chart pair: location (X̄ or I) and spread (R or MR).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ControlChart {
     /// `xbar_r` or `i_mr`.
-    pub kind: &'static str,
+    #[serde(deserialize_with = "super::serde_back::name")]
+    pub kind: super::serde_back::Name,
     pub subgroup: usize,
     /// Subgroup means (or the individual values).
+    #[serde(deserialize_with = "super::serde_back::vec_nan")]
     pub points: Vec<f64>,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub cl: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub ucl: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub lcl: f64,
     /// Subgroup ranges (or moving ranges; the first individual has none).
+    #[serde(deserialize_with = "super::serde_back::vec_nan")]
     pub ranges: Vec<f64>,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub r_cl: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub r_ucl: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub r_lcl: f64,
     /// Run-rule alarms on the location chart.
     pub alarms: Vec<RunAlarm>,

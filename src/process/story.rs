@@ -59,14 +59,18 @@ impl Confusion {
 /// The model's predicted band for one cycle (the overlay's ensemble at the
 /// cycle's speed, see `overlay::compare`): how much of the measured stroke
 /// and force lies inside the band, and the stroke's residuals.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BandFit {
     /// Fraction of the cycle's crank-angle grid inside the predicted min–max band.
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub stroke_in_band: f64,
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub force_in_band: f64,
     /// RMS of measured − predicted mean stroke over the cycle, mm.
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub stroke_rms_err_mm: f64,
     /// Measured − predicted stroke at bottom dead centre (insertion depth), mm.
+    #[serde(deserialize_with = "super::serde_back::f64_nan")]
     pub stroke_err_bdc_mm: f64,
 }
 
@@ -88,7 +92,7 @@ impl BandFit {
 }
 
 /// One connector.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConnectorStory {
     pub log: String,
     pub cycle: u64,
@@ -122,7 +126,7 @@ impl ConnectorStory {
 }
 
 /// The stories of one log's connectors.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StoryReport {
     pub connectors: Vec<ConnectorStory>,
     pub confusion: Confusion,

@@ -11,25 +11,50 @@ use std::io::Write;
 /// pin bar.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Curves {
+    #[serde(deserialize_with = "nan_vec")]
     pub t_s: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub crank_deg: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub stroke_mm: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub vel_mps: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub acc_mps2: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub torque_nm: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub contact_force_n: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub ecc_x_mm: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub ecc_y_mm: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub ideal_stroke_mm: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub ideal_vel_mps: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub ideal_acc_mps2: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub ideal_torque_nm: Vec<f64>,
+    #[serde(deserialize_with = "nan_vec")]
     pub process_force_n: Vec<f64>,
     /// Tangential slip speed at the clearance joint's contact point (m/s;
     /// NaN at the deterministic levels). Not a CSV column: the Archard wear
     /// model (`wear::archard`) integrates contact_force_n·|slip_mps|.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "nan_vec")]
     pub slip_mps: Vec<f64>,
+}
+
+/// A curve read back from JSON (a sweep shard's partial): JSON has no NaN,
+/// so serde_json writes the NaN of a quantity not computed (the forces at
+/// the kinematic level, the slip away from contact) as `null`; it reads
+/// back as NaN, so the merged study is the single run's.
+fn nan_vec<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+    Ok(Vec::<Option<f64>>::deserialize(d)?
+        .into_iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect())
 }
 
 /// Column names in CSV order.

@@ -203,6 +203,19 @@ pub fn run_sweep(
     opts: &SimOptions,
     progress: &Progress,
 ) -> SweepResult {
+    run_sweep_cases(base, grid, opts, &|_| true, progress)
+}
+
+/// [`run_sweep`] over the cases `keep` accepts (by their index in the
+/// grid's order: clearance, then speed, then material): one shard of a
+/// sweep split across machines (`--shard`, `plant::sweep`).
+pub fn run_sweep_cases(
+    base: &Params,
+    grid: &SweepGrid,
+    opts: &SimOptions,
+    keep: &(dyn Fn(usize) -> bool + Sync),
+    progress: &Progress,
+) -> SweepResult {
     let start = std::time::Instant::now();
     let nominal = Nominal {
         clearance_mm: grid
@@ -232,6 +245,12 @@ pub fn run_sweep(
             }
         }
     }
+    let jobs: Vec<_> = jobs
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| keep(*i))
+        .map(|(_, j)| j)
+        .collect();
     progress.set_total(jobs.len() as u64);
     progress.set_done(0);
     let on_chart_line = |c: f64, s: f64, m: &str| {

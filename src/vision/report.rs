@@ -548,22 +548,83 @@ impl ItemRecord {
     }
 }
 
+impl ItemRecord {
+    /// The record's lines, borrowed.
+    pub fn lines(&self) -> ItemLines<'_> {
+        ItemLines {
+            json: &self.json,
+            csv: &self.csv,
+            pins_csv: &self.pins_csv,
+        }
+    }
+}
+
+/// One item's lines of the per-item outputs, borrowed: from an
+/// [`ItemRecord`], or sliced from a shard's files by a merge.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ItemLines<'a> {
+    pub json: &'a str,
+    pub csv: &'a str,
+    pub pins_csv: &'a str,
+}
+
+/// Which per-item outputs a report folder holds besides the report: the
+/// items in `yield.json`, `items.csv` + `pins.csv`. (Parquet tables are
+/// the caller's `extra` files.)
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ItemFiles {
+    pub json: bool,
+    pub csv: bool,
+}
+
+impl Default for ItemFiles {
+    fn default() -> Self {
+        ItemFiles {
+            json: true,
+            csv: true,
+        }
+    }
+}
+
+/// The marker before the first item in `yield.json` (the items' own
+/// lines are compact, so it occurs once).
+pub const YIELD_JSON_ITEMS: &str = "\n  \"items\": [";
+
+/// Between two items of `yield.json`, and before the first.
+pub const YIELD_JSON_ITEM_SEP: &str = ",\n    ";
+
 /// `yield.json`: the report (indented) and the items, one compact JSON
 /// object per line, in batch order.
 pub fn yield_json(report: &YieldReport, items: &[ItemRecord]) -> Result<String, String> {
+    yield_json_lines(report, Some(items.iter().map(|r| r.json.as_str())))
+}
+
+/// [`yield_json`] from the items' JSON texts; `None`: the report only
+/// (no `items` key: the items are in another form, e.g. Parquet).
+pub fn yield_json_lines<'a>(
+    report: &YieldReport,
+    items: Option<impl Iterator<Item = &'a str>>,
+) -> Result<String, String> {
     let rep = serde_json::to_string_pretty(report).map_err(|e| e.to_string())?;
     let mut s = String::from("{\n  \"report\": ");
     s.push_str(&rep.replace('\n', "\n  "));
-    s.push_str(",\n  \"items\": [");
-    for (i, it) in items.iter().enumerate() {
-        s.push_str(if i == 0 { "\n    " } else { ",\n    " });
-        s.push_str(&it.json);
+    let Some(items) = items else {
+        s.push_str("\n}\n");
+        return Ok(s);
+    };
+    s.push(',');
+    s.push_str(YIELD_JSON_ITEMS);
+    let mut any = false;
+    for (i, it) in items.enumerate() {
+        s.push_str(if i == 0 {
+            "\n    "
+        } else {
+            YIELD_JSON_ITEM_SEP
+        });
+        s.push_str(it);
+        any = true;
     }
-    s.push_str(if items.is_empty() {
-        "]\n}\n"
-    } else {
-        "\n  ]\n}\n"
-    });
+    s.push_str(if any { "\n  ]\n}\n" } else { "]\n}\n" });
     Ok(s)
 }
 
@@ -584,8 +645,7 @@ pub fn write_all(
 }
 
 /// [`write_all`] from the items' records (in batch order), with `extra`
-/// files (name, bytes) beside the report: the one writer of a single run,
-/// a shard and a merge.
+/// files (name, bytes) beside the report.
 pub fn write_records(
     dir: &Path,
     report: &YieldReport,
@@ -593,33 +653,74 @@ pub fn write_records(
     title: &str,
     extra: &[(String, Vec<u8>)],
 ) -> Result<Vec<String>, String> {
-    // Every file is staged first; the old report is replaced only when all
-    // are complete (crate::output).
-    let mut out = crate::output::Report::new_in(dir).map_err(|e| e.to_string())?;
-    let mut put = |name: &str, data: &[u8]| -> Result<(), String> {
-        out.add(name, data).map_err(|e| e.to_string())?;
-        Ok(())
-    };
-    put("yield.json", yield_json(report, records)?.as_bytes())?;
-    let mut csv = String::from(ITEMS_CSV_HEADER);
-    let mut pins = String::from(PINS_CSV_HEADER);
-    for r in records {
-        csv.push_str(&r.csv);
-        pins.push_str(&r.pins_csv);
+    let lines: Vec<ItemLines> = records.iter().map(ItemRecord::lines).collect();
+    let mut files = yield_files(report, &lines, ItemFiles::default(), title)?;
+    files.extend(extra.iter().cloned());
+    write_files(dir, &files, &[])
+}
+
+/// The files of a yield folder — of a single run, a shard and a merge
+/// alike: `yield.json` (with the items when `files.json`), `items.csv` and
+/// `pins.csv` (when `files.csv`), the charts and `yield.md`, as (name,
+/// bytes) in that order, the items' lines in batch order.
+pub fn yield_files(
+    report: &YieldReport,
+    lines: &[ItemLines],
+    files: ItemFiles,
+    title: &str,
+) -> Result<Vec<(String, Vec<u8>)>, String> {
+    let mut out = Vec::new();
+    let items = files.json.then(|| lines.iter().map(|l| l.json));
+    out.push((
+        "yield.json".to_string(),
+        yield_json_lines(report, items)?.into_bytes(),
+    ));
+    if files.csv {
+        let mut csv = String::from(ITEMS_CSV_HEADER);
+        let mut pins = String::from(PINS_CSV_HEADER);
+        for r in lines {
+            csv.push_str(r.csv);
+            pins.push_str(r.pins_csv);
+        }
+        out.push(("items.csv".to_string(), csv.into_bytes()));
+        out.push(("pins.csv".to_string(), pins.into_bytes()));
     }
-    put("items.csv", csv.as_bytes())?;
-    put("pins.csv", pins.as_bytes())?;
     let mut charts = Vec::new();
     for (name, panel) in report.panels() {
         let file = format!("{name}.png");
         let png = crate::plot::render_png(std::slice::from_ref(&panel), 1, 900, 500)
             .map_err(|e| e.to_string())?;
-        put(&file, &png)?;
+        out.push((file.clone(), png));
         charts.push((name.replace('_', " "), file));
     }
-    put("yield.md", report.markdown(title, &charts).as_bytes())?;
-    for (name, bytes) in extra {
-        put(name, bytes)?;
+    out.push((
+        "yield.md".to_string(),
+        report.markdown(title, &charts).into_bytes(),
+    ));
+    Ok(out)
+}
+
+/// The header line of `items.csv` and of `pins.csv` (with its line end).
+pub fn csv_headers() -> (&'static str, &'static str) {
+    (ITEMS_CSV_HEADER, PINS_CSV_HEADER)
+}
+
+/// Writes a report folder's files (names may be paths below `dir`) in one
+/// commit (`crate::output::Report`: the old folder is replaced only when
+/// all are staged); `remove`: entries of `dir` the commit deletes (an
+/// earlier run's outputs this run does not write). Returns the files
+/// written.
+pub fn write_files(
+    dir: &Path,
+    files: &[(String, Vec<u8>)],
+    remove: &[String],
+) -> Result<Vec<String>, String> {
+    let mut out = crate::output::Report::new_in(dir).map_err(|e| e.to_string())?;
+    for (name, bytes) in files {
+        out.add(name, bytes).map_err(|e| e.to_string())?;
+    }
+    for r in remove {
+        out.remove(r);
     }
     Ok(out
         .commit()

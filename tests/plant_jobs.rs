@@ -1,0 +1,248 @@
+//! `--shard k/n` on the jobs besides `yield` and `monitor`, run as the
+//! cluster engines would run them (separate processes over the same
+//! inputs): `sweep`'s shards merged by `pinsight merge` give the single
+//! run's study (every byte but the wall-clock times no two runs share),
+//! and `overlay` over several logs puts each log in exactly one shard,
+//! in the folder a single run gives it, with the same files (the same
+//! bytes but the prediction's `wall_ms` in `overlay.json`).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn pinsight() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_pinsight"));
+    for v in [
+        "PINSIGHT_SHARD",
+        "PINSIGHT_SHARDS",
+        "JOB_COMPLETION_INDEX",
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_COUNT",
+        "SLURM_ARRAY_TASK_MIN",
+    ] {
+        c.env_remove(v);
+    }
+    c
+}
+
+fn ok(o: &Output, codes: &[i32]) {
+    assert!(
+        o.status.code().is_some_and(|c| codes.contains(&c)),
+        "exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// Every file below `dir`, by its path relative to `dir`.
+fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    fn walk(root: &Path, d: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                let rel = p.strip_prefix(root).unwrap().to_string_lossy().into_owned();
+                out.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+/// A JSON value without its `wall_ms` members (at any depth).
+fn without_wall(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.remove("wall_ms");
+            m.values_mut().for_each(without_wall);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(without_wall),
+        _ => {}
+    }
+}
+
+/// A CSV without its `wall_ms` column.
+fn csv_without_wall(text: &str) -> Vec<Vec<String>> {
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let col = rows[0]
+        .iter()
+        .position(|h| h == "wall_ms")
+        .expect("a wall_ms column");
+    rows.into_iter()
+        .map(|mut r| {
+            r.remove(col);
+            r
+        })
+        .collect()
+}
+
+fn sweep(out: &Path, shard: Option<&str>) -> Output {
+    let mut c = pinsight();
+    c.args(["sweep", "--clearances", "0.1,0.5", "--speeds", "1200"])
+        .args(["--materials", "alloy_steel,copper"])
+        .args(["--warmup", "0.5", "--revs", "0.5", "--out"])
+        .arg(out);
+    if let Some(s) = shard {
+        c.args(["--shard", s]);
+    }
+    c.output().unwrap()
+}
+
+#[test]
+fn sweep_shards_merge_to_the_single_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    ok(&sweep(&whole, None), &[0]);
+    // Three shards of four cases: 0/3 runs cases 0 and 3.
+    let shard = |k: u32| tmp.path().join(format!("s{k}"));
+    for k in 0..3 {
+        ok(&sweep(&shard(k), Some(&format!("{k}/3"))), &[0]);
+        let j: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(shard(k).join("sweep.json")).unwrap()).unwrap();
+        let ran = j["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| !c["summary"].is_null())
+            .count();
+        assert_eq!(ran, if k == 0 { 2 } else { 1 }, "shard {k}: {j:.300}");
+    }
+    let merged = tmp.path().join("merged");
+    let o = pinsight()
+        .arg("merge")
+        .args([shard(2), shard(0), shard(1)])
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    ok(&o, &[0]);
+
+    let (w, m) = (tree(&whole), tree(&merged));
+    assert_eq!(
+        w.keys().collect::<Vec<_>>(),
+        m.keys().collect::<Vec<_>>(),
+        "the merged folder holds the single run's files"
+    );
+    for (name, bytes) in &w {
+        let other = &m[name];
+        if name == "sweep.json" {
+            let mut a: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+            let mut b: serde_json::Value = serde_json::from_slice(other).unwrap();
+            without_wall(&mut a);
+            without_wall(&mut b);
+            assert_eq!(a, b, "sweep.json differs beyond wall_ms");
+        } else if name == "sweep.csv" {
+            let (a, b) = (
+                String::from_utf8(bytes.clone()).unwrap(),
+                String::from_utf8(other.clone()).unwrap(),
+            );
+            assert_eq!(
+                csv_without_wall(&a),
+                csv_without_wall(&b),
+                "sweep.csv differs beyond wall_ms"
+            );
+        } else {
+            assert!(
+                bytes == other,
+                "{name} differs between the single run and the merge"
+            );
+        }
+    }
+
+    // A missing shard is refused, naming it, and nothing is written.
+    let refused = tmp.path().join("refused");
+    let o = pinsight()
+        .arg("merge")
+        .args([shard(0), shard(1)])
+        .arg("--out")
+        .arg(&refused)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("2/3 missing"), "{err}");
+    assert!(!refused.exists());
+}
+
+fn logs() -> Vec<PathBuf> {
+    let f = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/logs");
+    vec![
+        f.join("synth-1800-ripple-dropouts-blocks.mcap"),
+        f.join("synth-1200-model-c030.mcap"),
+        f.join("synth-1500-nomarks-lz4.mcap"),
+    ]
+}
+
+fn overlay(out: &Path, shard: Option<&str>) -> Output {
+    let mut c = pinsight();
+    c.arg("overlay")
+        .args(logs())
+        .arg("/no/such/log.mcap")
+        .args(["--revs", "2", "--warmup", "0", "--points", "90", "--out"])
+        .arg(out);
+    if let Some(s) = shard {
+        c.args(["--shard", s]);
+    }
+    c.output().unwrap()
+}
+
+#[test]
+fn overlay_shards_hold_every_log_once_as_the_single_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    // The missing log is listed and the others done: exit 3.
+    let o = overlay(&whole, None);
+    ok(&o, &[3]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/no/such/log.mcap"));
+    let w = tree(&whole);
+    let folders: std::collections::BTreeSet<&str> =
+        w.keys().map(|k| k.split('/').next().unwrap()).collect();
+    assert_eq!(folders.len(), 3, "{folders:?}");
+
+    let mut union = BTreeMap::new();
+    let mut missing_in = Vec::new();
+    for k in 0..2 {
+        let d = tmp.path().join(format!("s{k}"));
+        let o = overlay(&d, Some(&format!("{k}/2")));
+        ok(&o, &[0, 3]);
+        if String::from_utf8_lossy(&o.stderr).contains("/no/such/log.mcap") {
+            missing_in.push(k);
+        }
+        if d.exists() {
+            for (name, bytes) in tree(&d) {
+                assert!(
+                    union.insert(name.clone(), bytes).is_none(),
+                    "{name} written by two shards"
+                );
+            }
+        }
+    }
+    assert_eq!(missing_in.len(), 1, "the missing log is one shard's error");
+    assert_eq!(
+        w.keys().collect::<Vec<_>>(),
+        union.keys().collect::<Vec<_>>(),
+        "the shards' folders together are the single run's"
+    );
+    // Every file the same bytes but `overlay.json`, whose prediction
+    // carries its wall-clock time (`wall_ms`): the same without it.
+    for (name, bytes) in &w {
+        if name.ends_with(".json") {
+            let mut a: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+            let mut b: serde_json::Value = serde_json::from_slice(&union[name]).unwrap();
+            without_wall(&mut a);
+            without_wall(&mut b);
+            assert_eq!(a, b, "{name} differs beyond wall_ms");
+        } else {
+            assert!(
+                bytes == &union[name],
+                "{name} differs between the single run and its shard"
+            );
+        }
+    }
+}
