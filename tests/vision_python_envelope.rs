@@ -132,7 +132,10 @@ fn large_tips_are_scaled_by_their_own_lattice() {
         let t = truth::Truth::from_json(&text).expect("truth");
         let v: serde_json::Value = serde_json::from_str(&text).expect("json");
         let recipe = Recipe::load(&dir.join(&t.recipe)).expect("recipe");
-        assert!(recipe.mm_per_px.is_none(), "{seed}: the scale is to be found");
+        assert!(
+            recipe.mm_per_px.is_none(),
+            "{seed}: the scale is to be found"
+        );
         let img = dir.join(v["image"].as_str().expect("image name"));
         let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
             .unwrap_or_else(|e| panic!("{seed}: {e}"));
