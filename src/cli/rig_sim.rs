@@ -74,8 +74,10 @@ pub fn parse_rate(s: &str) -> anyhow::Result<f64> {
             .parse::<f64>()
             .map_err(|_| anyhow!("--rate `{s}`: real, Nx (e.g. 8x) or max"))?,
     };
-    if !(r > 0.0) {
-        bail!("--rate `{s}` must be above 0");
+    // 0.001× paces a second of log over 17 minutes of wall time; slower is
+    // not a rig, and far slower overflows the wall clock's Duration.
+    if !(r >= 1e-3) {
+        bail!("--rate `{s}` must be at least 0.001 (or max)");
     }
     Ok(r)
 }
@@ -85,13 +87,16 @@ pub fn options(args: &Args) -> anyhow::Result<SimOptions> {
         if v.is_finite() && v > 0.0 && v <= max {
             Ok(v)
         } else {
-            bail!("{what} must be above 0 and at most {max}, not {v}")
+            bail!(
+                "{what} must be above 0 and at most {max}, not {}",
+                crate::fmt::plain(v)
+            )
         }
     };
     if !(args.clearance.is_finite() && (0.0..=2.0).contains(&args.clearance)) {
         bail!(
             "--clearance must be between 0 and 2 mm, not {}",
-            args.clearance
+            crate::fmt::plain(args.clearance)
         );
     }
     Ok(SimOptions {

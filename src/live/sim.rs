@@ -32,7 +32,7 @@ use crate::rig::channel_map::SignalKind;
 use crate::rig::synth::faults::{CycleDraw, DrawStream, FaultRates, insertion_force};
 use crate::rig::synth::{
     Dropout, IdealTruth, ModelTruth, SynthChannel, SynthConfig, Truth, default_channels,
-    generate_with,
+    generate_until,
 };
 use crate::vision::Recipe;
 use crate::vision::result::Verdict;
@@ -482,7 +482,7 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
             }
         }
     };
-    generate_with(&cfg, &truth, |c, lt, pt, d| {
+    generate_until(&cfg, &truth, stop, |c, lt, pt, d| {
         if error.is_some() || stop.load(Ordering::Relaxed) {
             return;
         }

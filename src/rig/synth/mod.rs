@@ -364,6 +364,18 @@ fn round_to(x: f64, q: f64) -> f64 {
 pub fn generate_with(
     cfg: &SynthConfig,
     truth: &dyn Truth,
+    sink: impl FnMut(usize, u64, u64, &[u8]),
+) {
+    generate_until(cfg, truth, &std::sync::atomic::AtomicBool::new(false), sink);
+}
+
+/// [`generate_with`] that ends early when `stop` is set (checked before
+/// every message): a live simulated line of 8 h stops when it is told to,
+/// not after generating the rest of its samples.
+pub fn generate_until(
+    cfg: &SynthConfig,
+    truth: &dyn Truth,
+    stop: &std::sync::atomic::AtomicBool,
     mut sink: impl FnMut(usize, u64, u64, &[u8]),
 ) {
     let mut rng = Rng::new(cfg.seed);
@@ -441,7 +453,7 @@ pub fn generate_with(
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap_or((0, f64::INFINITY));
         let tdc_t = tdcs.get(next_tdc).map(|x| x.0).unwrap_or(f64::INFINITY);
-        if ts > dur && tdc_t > dur {
+        if (ts > dur && tdc_t > dur) || stop.load(std::sync::atomic::Ordering::Relaxed) {
             break;
         }
         use std::fmt::Write as _;
