@@ -141,19 +141,71 @@ fn inspect_is_one_answer_from_cli_and_the_vision_pane() {
     let dir = image_set();
     let d = dir.path();
     let recipe = d.join("hdr-2x10.toml").to_str().unwrap().to_string();
-    for image in ["good.jpg", "zero-byte.png"] {
+    for image in ["good.jpg", "good2.png", "zero-byte.png"] {
+        let name = image;
         let image = d.join(image).to_str().unwrap().to_string();
         let (image, recipe) = (image.as_str(), recipe.as_str());
         let cli = run_json(&["inspect", image, "-r", recipe, "--json"], d);
         let mut cli = cli.as_array().unwrap()[0].clone();
-        let mut render =
-            run_json(&["render", "vision", image, recipe, "--format", "json"], d)["result"].take();
-        let mut batch = batch_export(d, &[image, recipe], "vision")["result"].take();
+        let mut pane = run_json(&["render", "vision", image, recipe, "--format", "json"], d);
+        let mut render = pane["result"].take();
+        let mut batch_pane = batch_export(d, &[image, recipe], "vision");
+        let mut batch = batch_pane["result"].take();
         for v in [&mut cli, &mut render, &mut batch] {
             without_timings(v);
         }
         assert_eq!(render, cli, "{image}: render vision differs from inspect");
         assert_eq!(batch, cli, "{image}: batch export differs from inspect");
+        // The verdict explains itself, the same in the JSON, the pane and
+        // the CLI's text: h2x10-00 (truth: pin 1,7 bent by 0.24 mm against
+        // 0.1 mm) fails with that pin named and its offset over the band.
+        let why = &cli["inspection"]["failed_because"];
+        if name == "good2.png" {
+            let lines: Vec<&str> = why
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|l| l.as_str().unwrap())
+                .collect();
+            assert_eq!(lines.len(), 1, "{lines:?}");
+            assert!(
+                lines[0].starts_with("pin row 1 col 7 bent: offset 0.24")
+                    && lines[0].contains("× position_mm 0.1"),
+                "{lines:?}"
+            );
+            let pin = cli["inspection"]["pins"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["row"] == 1 && p["col"] == 7)
+                .unwrap();
+            assert!(lines[0].ends_with(pin["reason"].as_str().unwrap()));
+            let text = bin()
+                .args(["inspect", image, "-r", recipe])
+                .current_dir(d)
+                .output()
+                .unwrap();
+            let text = String::from_utf8_lossy(&text.stdout);
+            assert!(text.contains(&format!("  why: {}", lines[0])), "{text}");
+        } else if name == "good.jpg" {
+            // h2x10-01 (truth: pin 1,5 chipped to 0.36 of its area).
+            let lines = why.as_array().unwrap();
+            assert_eq!(lines.len(), 1, "{why}");
+            let l = lines[0].as_str().unwrap();
+            assert!(
+                l.starts_with("pin row 1 col 5 damaged: tip area 0.3")
+                    && l.contains("outside tip_area [0.6, 1.5]"),
+                "{l}"
+            );
+        }
+        for p in [&pane, &batch_pane] {
+            let want = if why.is_null() {
+                &serde_json::json!([])
+            } else {
+                why
+            };
+            assert_eq!(&p["failed_because"], want, "{image}: the pane's why");
+        }
     }
 }
 

@@ -31,6 +31,7 @@ fn synthetic_fixtures_agree_with_their_truth() {
         let recipe = Recipe::load(&dir.join(&t.recipe)).unwrap();
         let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
             .unwrap_or_else(|e| panic!("{stem}: {e}"));
+        explains_itself(&stem, &ins);
         let c = truth::compare(&ins, &t, 15.0);
         assert!(
             c.verdict_ok && c.status_mismatches.is_empty(),
@@ -60,4 +61,81 @@ fn synthetic_fixtures_agree_with_their_truth() {
     );
     assert!(rn <= 0.15, "{rn}");
     assert!(rq <= 0.05, "{rq}");
+}
+
+/// The number standing before `marker` in `s` (e.g. "1.32" in
+/// "= 1.32 × position_mm").
+fn number_before(s: &str, marker: &str) -> f64 {
+    let head = &s[..s
+        .find(marker)
+        .unwrap_or_else(|| panic!("no `{marker}` in `{s}`"))];
+    let tok = head.split_whitespace().last().unwrap();
+    tok.parse().unwrap_or_else(|_| panic!("`{tok}` in `{s}`"))
+}
+
+/// Every failing pin and counted extra is named in `failed_because` with
+/// its numbers against the limit, and those numbers are the measurements
+/// (a passing connector has no such line).
+fn explains_itself(stem: &str, ins: &vision::Inspection) {
+    let bad: Vec<_> = ins
+        .pins
+        .iter()
+        .filter(|p| p.status != PinStatus::Ok)
+        .collect();
+    assert_eq!(
+        ins.failed_because.len(),
+        bad.len() + ins.extras.len(),
+        "{stem}: {:#?}",
+        ins.failed_because
+    );
+    let tol = &ins.tolerance;
+    for p in bad {
+        let head = format!("pin row {} col {} {}: ", p.row, p.col, p.status.as_str());
+        let line = ins
+            .failed_because
+            .iter()
+            .find(|l| l.starts_with(&head))
+            .unwrap_or_else(|| panic!("{stem}: no `{head}` in {:#?}", ins.failed_because));
+        match p.status {
+            PinStatus::Bent => {
+                let k = number_before(line, "× position_mm");
+                let want = p.offset_mm.unwrap() / tol.position_mm;
+                assert!(k > 1.0 && (k - want).abs() < 0.006, "{stem}: {line}");
+            }
+            PinStatus::Damaged => {
+                let a = number_before(line, "× nominal");
+                let [lo, hi] = tol.tip_area.unwrap();
+                assert!(a < lo || a > hi, "{stem}: {line}");
+                assert!((a - p.area_ratio.unwrap()).abs() < 0.006, "{stem}: {line}");
+            }
+            PinStatus::Short | PinStatus::High => {
+                let k = number_before(line, "× height_tol_mm");
+                let h = p.height_mm.unwrap();
+                let want = (h - tol.height_mm.unwrap()).abs() / tol.height_tol_mm.unwrap();
+                assert!(k > 1.0 && (k - want).abs() < 0.006, "{stem}: {line}");
+            }
+            PinStatus::Missing => assert!(line.contains("no "), "{stem}: {line}"),
+            PinStatus::Ok => unreachable!(),
+        }
+    }
+    for e in &ins.extras {
+        let head = format!("extra at ({:.1}, {:.1}) px: ", e.x_px, e.y_px);
+        let line = ins
+            .failed_because
+            .iter()
+            .find(|l| l.starts_with(&head))
+            .unwrap_or_else(|| panic!("{stem}: no `{head}` in {:#?}", ins.failed_because));
+        if ins.view == vision::View::Top {
+            // Area, level against the local tip level, SNR, distance.
+            let a = number_before(line, "of a tip");
+            assert!((a - e.area_ratio).abs() < 0.006, "{stem}: {line}");
+            assert!(line.contains("σ above the local noise"), "{stem}: {line}");
+            assert!(line.contains("local tip level"), "{stem}: {line}");
+        } else {
+            assert!(
+                line.contains("mm high") || line.contains("of the silhouette"),
+                "{stem}: {line}"
+            );
+        }
+    }
 }

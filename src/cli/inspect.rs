@@ -167,6 +167,9 @@ pub fn text_report(r: &ItemResult) -> String {
                 .unwrap_or_default()
         );
     }
+    for w in &ins.failed_because {
+        let _ = writeln!(s, "  why: {w}");
+    }
     for w in &ins.warnings {
         let _ = writeln!(s, "  note: {w}");
     }

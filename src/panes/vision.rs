@@ -41,6 +41,10 @@ pub struct PinRow {
     pub area_ratio: Option<f64>,
     /// Side view: height above the housing's top edge.
     pub height_mm: Option<f64>,
+    /// Top view: the tip's level against the local tip level.
+    pub contrast_ratio: Option<f64>,
+    /// Why the pin is not `ok`, with its numbers against the limit.
+    pub reason: Option<String>,
 }
 
 /// The Vision pane's view.
@@ -60,6 +64,10 @@ pub struct VisionView {
     pub pins: Vec<PinRow>,
     /// The selected pin row.
     pub selected: usize,
+    /// Why the connector fails: one line per failing pin and counted
+    /// extra with its numbers against the limit (the inspection's
+    /// `failed_because`, as the CLI prints it).
+    pub failed_because: Vec<String>,
     /// The fitted grid: rotation, scale, fit residual.
     pub grid: Option<String>,
     pub warnings: Vec<String>,
@@ -94,6 +102,7 @@ impl VisionView {
                 f(p.offset_mm),
                 f(p.area_ratio),
                 f(p.height_mm),
+                p.reason.clone().unwrap_or_default(),
             ]
         };
         csv_table(
@@ -108,6 +117,7 @@ impl VisionView {
                 "offset_mm",
                 "area_ratio",
                 "height_mm",
+                "reason",
             ],
             self.pins.iter().map(row),
         )
@@ -143,6 +153,7 @@ pub fn view(s: &Session, ui: &PaneState) -> VisionView {
         verdict: None,
         counts: None,
         extras: 0,
+        failed_because: Vec::new(),
         pins: Vec::new(),
         selected: 0,
         grid: None,
@@ -201,6 +212,7 @@ pub fn view(s: &Session, ui: &PaneState) -> VisionView {
             ins.grid.fit_inliers
         ));
         v.warnings = ins.warnings.clone();
+        v.failed_because = ins.failed_because.clone();
         v.pins = ins
             .pins
             .iter()
@@ -215,6 +227,8 @@ pub fn view(s: &Session, ui: &PaneState) -> VisionView {
                 offset_mm: p.offset_mm,
                 area_ratio: p.area_ratio,
                 height_mm: p.height_mm,
+                contrast_ratio: p.contrast_ratio,
+                reason: p.reason.clone(),
             })
             .collect();
         v.selected = ui.vision.pin.min(v.pins.len().saturating_sub(1));

@@ -438,8 +438,8 @@ fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
     v.map(|v| v.to_string()).unwrap_or_default()
 }
 
-const ITEMS_CSV_HEADER: &str = "name,status,part_number,lot,rig_id,motor_rpm,clearance_mm,cycle,ok,missing,damaged,bent,short,high,extras,error_kind,error\n";
-const PINS_CSV_HEADER: &str = "name,row,col,status,x_px,y_px,nominal_x_px,nominal_y_px,dx_mm,dy_mm,offset_mm,area_ratio,height_mm\n";
+const ITEMS_CSV_HEADER: &str = "name,status,part_number,lot,rig_id,motor_rpm,clearance_mm,cycle,ok,missing,damaged,bent,short,high,extras,error_kind,error,failed_because\n";
+const PINS_CSV_HEADER: &str = "name,row,col,status,x_px,y_px,nominal_x_px,nominal_y_px,dx_mm,dy_mm,offset_mm,area_ratio,height_mm,reason\n";
 
 /// One row per item.
 pub fn items_csv(results: &[ItemResult]) -> String {
@@ -458,7 +458,7 @@ pub fn items_csv_row(r: &ItemResult) -> String {
         let c = r.inspection.as_ref().map(|i| &i.counts);
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             csv_field(&r.name),
             match r.status {
                 ItemStatus::Pass => "pass",
@@ -480,6 +480,12 @@ pub fn items_csv_row(r: &ItemResult) -> String {
             opt(r.inspection.as_ref().map(|i| i.extras.len())),
             opt(r.error.as_ref().map(|e| e.kind.as_str())),
             csv_field(&opt(r.error.as_ref().map(|e| e.message.clone()))),
+            csv_field(
+                &r.inspection
+                    .as_ref()
+                    .map(|i| i.failed_because.join("; "))
+                    .unwrap_or_default()
+            ),
         );
     }
     s
@@ -504,7 +510,7 @@ pub fn pins_csv_rows(r: &ItemResult) -> String {
         for p in &ins.pins {
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{},{:.3},{:.3},{},{},{},{},{}",
+                "{},{},{},{},{},{},{:.3},{:.3},{},{},{},{},{},{}",
                 csv_field(&r.name),
                 p.row,
                 p.col,
@@ -518,6 +524,7 @@ pub fn pins_csv_rows(r: &ItemResult) -> String {
                 f(p.offset_mm, 5),
                 f(p.area_ratio, 4),
                 f(p.height_mm, 5),
+                csv_field(p.reason.as_deref().unwrap_or("")),
             );
         }
     }

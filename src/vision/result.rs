@@ -255,6 +255,11 @@ pub struct Inspection {
     pub counts: StatusCounts,
     /// Things the user should know (e.g. scale estimated, housing not found).
     pub warnings: Vec<String>,
+    /// Why the connector fails, one line per failing pin and counted extra,
+    /// each with its numbers against the limit (empty when it passes): what
+    /// the report, the CLI and the Vision pane show so that a verdict can be
+    /// checked (or a wrong one diagnosed) from the report alone.
+    pub failed_because: Vec<String>,
 }
 
 /// What a view found on the part: every grid position, the extras that
@@ -289,6 +294,7 @@ impl Inspection {
             ignored: found.ignored,
             counts: StatusCounts::default(),
             warnings,
+            failed_because: Vec::new(),
         };
         ins.finish();
         ins
@@ -307,5 +313,45 @@ impl Inspection {
             } else {
                 Verdict::Fail
             };
+        self.failed_because = self.explain();
+    }
+
+    /// One line per failing pin and counted extra: which one, and by how
+    /// much (the view's reason, or the bare measurements when it gave none).
+    fn explain(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for p in self.pins.iter().filter(|p| p.status != PinStatus::Ok) {
+            let why = p.reason.clone().unwrap_or_else(|| {
+                let mut m = Vec::new();
+                if let Some(o) = p.offset_mm {
+                    m.push(format!("offset {o:.3} mm"));
+                }
+                if let Some(a) = p.area_ratio {
+                    m.push(format!("tip area {a:.2} × nominal"));
+                }
+                if let Some(h) = p.height_mm {
+                    m.push(format!("height {h:.3} mm"));
+                }
+                if m.is_empty() {
+                    "nothing measured there".into()
+                } else {
+                    m.join(", ")
+                }
+            });
+            out.push(format!(
+                "pin row {} col {} {}: {why}",
+                p.row,
+                p.col,
+                p.status.as_str()
+            ));
+        }
+        for e in &self.extras {
+            let why = e
+                .reason
+                .clone()
+                .unwrap_or_else(|| format!("area {:.2} of a tip", e.area_ratio));
+            out.push(format!("extra at ({:.1}, {:.1}) px: {why}", e.x_px, e.y_px));
+        }
+        out
     }
 }

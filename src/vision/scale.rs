@@ -45,6 +45,8 @@ struct Candidate {
     w: f64,
     /// Median top-hat peak of the matched blobs.
     peak: f64,
+    /// Centres of the matched blobs, px.
+    pts: Vec<(f64, f64)>,
 }
 
 /// A candidate's matched blobs must reach this share of the strongest
@@ -92,6 +94,7 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
     let mut spacings = Vec::new();
     let mut widths = Vec::new();
     let mut peaks = Vec::new();
+    let mut matched_pts = Vec::new();
     // Blobs sorted by x for a windowed neighbour search.
     let mut order: Vec<usize> = (0..pts.len()).collect();
     order.sort_by(|&a, &b| pts[a].0.total_cmp(&pts[b].0));
@@ -141,6 +144,7 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             support += 1;
             widths.push(wi);
             peaks.push(pi);
+            matched_pts.push((xi, yi));
         }
     }
     let peak = super::grid::median(&mut peaks).unwrap_or(0.0);
@@ -151,7 +155,43 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
         widths,
         w,
         peak,
+        pts: matched_pts,
     }
+}
+
+/// The most blobs a perfect image of the part can match: positions with a
+/// neighbouring position one pitch further along the row or the column
+/// (skips left out). A 3 × 2 part matches at most 5 of its 6 tips, a
+/// 1 × N part N − 1.
+fn most_matched(recipe: &Recipe) -> usize {
+    recipe
+        .positions()
+        .iter()
+        .filter(|&&(r, c)| {
+            (c + 1 < recipe.cols && !recipe.is_skipped(r, c + 1))
+                || (r + 1 < recipe.rows && !recipe.is_skipped(r + 1, c))
+        })
+        .count()
+}
+
+/// Share of `small`'s matched blobs lying inside the tips of `large` (within
+/// 0.6 of its tip width of one of its matched blobs).
+fn share_inside(small: &Candidate, large: &Candidate) -> f64 {
+    if small.pts.is_empty() {
+        return 0.0;
+    }
+    let r2 = (0.6 * large.w).powi(2);
+    let inside = small
+        .pts
+        .iter()
+        .filter(|&&(x, y)| {
+            large
+                .pts
+                .iter()
+                .any(|&(lx, ly)| (x - lx).powi(2) + (y - ly).powi(2) <= r2)
+        })
+        .count();
+    inside as f64 / small.pts.len() as f64
 }
 
 /// Estimates the tip width (px) and the pitch (px) from the image alone.
@@ -175,7 +215,11 @@ pub fn estimate<P: Px>(
     let mut coarse_cache: Vec<Option<Coarse>> = vec![None; 9];
     let mut cands: Vec<Candidate> = Vec::new();
     // From the largest candidate down: large ones are cheap (coarse images).
-    let n_pos = recipe.positions().len() as f64;
+    // Ending the ladder needs nearly every position matched: counted against
+    // what the part can match (a small grid's corner tip has no neighbour
+    // further on), not against its positions, or a 3 × 2 part never ends
+    // it and the ladder runs on into sub-tip structure.
+    let n_match = most_matched(recipe).max(1) as f64;
     let mut w = w_max;
     let mut contrast_checked = false;
     while w >= W_MIN {
@@ -195,7 +239,7 @@ pub fn estimate<P: Px>(
         // tip's contrast: no smaller candidate can do better (and smaller
         // ones cost the most). A lattice of faint blobs (fixture texture,
         // vignetting bumps at a large width) does not end the search.
-        let done = c.score as f64 >= 0.9 * n_pos && c.peak >= DONE_PEAK * full_scale as f64;
+        let done = c.score as f64 >= 0.9 * n_match && c.peak >= DONE_PEAK * full_scale as f64;
         if c.score > 0 {
             cands.push(c);
         }
@@ -210,13 +254,37 @@ pub fn estimate<P: Px>(
     // as many neighbours as the few pins but at a hundredth of their
     // contrast). Among those, the highest score; ties to the larger width.
     let top_peak = cands.iter().map(|c| c.peak).fold(0.0, f64::max);
-    let mut best: Option<Candidate> = None;
-    for c in cands {
-        if c.peak >= PEAK_SHARE * top_peak && best.as_ref().is_none_or(|b| c.score > b.score) {
-            best = Some(c);
+    cands.retain(|c| c.peak >= PEAK_SHARE * top_peak);
+    let mut best: Option<usize> = None;
+    for (i, c) in cands.iter().enumerate() {
+        if best.is_none_or(|b| c.score > cands[b].score) {
+            best = Some(i);
         }
     }
-    let Some(b) = best else {
+    // Cross-check with the blobs' size: a lattice whose blobs lie inside the
+    // tips of a lattice at twice its width or more is structure of those
+    // tips (glints, rim slivers a narrow top-hat leaves of a large tip,
+    // fragments of a bevel), not the part. The tips at their own width stand
+    // at least as strong in the top-hat as their fragments do, so the larger
+    // lattice takes over when its blobs are as strong and hold most of the
+    // smaller one's.
+    if let Some(bi) = best {
+        let b = &cands[bi];
+        let mut bigger: Option<usize> = None;
+        for (i, c) in cands.iter().enumerate() {
+            let holds = c.w >= 2.0 * b.w
+                && c.score >= 2
+                && c.peak >= 0.8 * b.peak
+                && share_inside(b, c) >= 0.5;
+            if holds && bigger.is_none_or(|g| c.score > cands[g].score) {
+                bigger = Some(i);
+            }
+        }
+        if bigger.is_some() {
+            best = bigger;
+        }
+    }
+    let Some(b) = best.map(|i| cands.swap_remove(i)) else {
         return Err(no_pins(format!(
             "no tip-sized blobs in a row at the recipe's pitch-to-tip ratio ({:.2}) for any tip width from {W_MIN} to {w_max:.0} px (mm_per_px absent, so the scale had to be found)",
             recipe.pitch_mm[0] / recipe.pin_mm
@@ -238,4 +306,54 @@ pub fn estimate<P: Px>(
         support: b.support,
         size_ratio,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn recipe(rows: u32, cols: u32, skip: &str) -> Recipe {
+        Recipe::from_toml_str(
+            &format!(
+                "part_number = \"T\"\nview = \"top\"\nrows = {rows}\ncols = {cols}\npitch_mm = [2.0, 2.0]\npin_mm = 0.5\npin_shape = \"round\"\npolarity = \"bright\"\n{skip}\n[tolerance]\nposition_mm = 0.1\n"
+            ),
+            "t",
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn most_matched_counts_positions_with_a_neighbour_further_on() {
+        assert_eq!(most_matched(&recipe(3, 2, "")), 5);
+        assert_eq!(most_matched(&recipe(1, 4, "")), 3);
+        assert_eq!(most_matched(&recipe(2, 10, "")), 19);
+        // (0,1) skipped: (0,0) still has (1,0) below, (1,0) has (1,1)
+        // beside it, (1,1) has nothing further on.
+        assert_eq!(most_matched(&recipe(2, 2, "skip = [[0, 1]]")), 2);
+    }
+
+    fn cand(w: f64, pts: Vec<(f64, f64)>) -> Candidate {
+        Candidate {
+            score: pts.len() as i64,
+            support: pts.len(),
+            spacings: Vec::new(),
+            widths: Vec::new(),
+            w,
+            peak: 1.0,
+            pts,
+        }
+    }
+
+    #[test]
+    fn blobs_inside_larger_tips_are_counted() {
+        let large = cand(40.0, vec![(100.0, 100.0), (250.0, 100.0)]);
+        // Two fragments inside the first tip (within 0.6 × 40 = 24 px),
+        // one inside the second, one between the tips.
+        let small = cand(
+            8.0,
+            vec![(110.0, 95.0), (90.0, 112.0), (262.0, 100.0), (175.0, 100.0)],
+        );
+        assert!((share_inside(&small, &large) - 0.75).abs() < 1e-12);
+        assert_eq!(share_inside(&cand(8.0, vec![]), &large), 0.0);
+    }
 }

@@ -594,8 +594,13 @@ pub fn inspect_side<P: Px>(
         } else if ar >= rule.min_area_ratio {
             extras.push(ExtraResult {
                 reason: Some(format!(
-                    "dust above the housing: area {ar:.2} of a tip ≥ {}",
-                    rule.min_area_ratio
+                    "dust above the housing: area {ar:.2} of a tip ≥ {}, contrast {c_ratio:.2} of the silhouette's, {} above the noise",
+                    rule.min_area_ratio,
+                    if snr.is_finite() {
+                        format!("{snr:.0} σ")
+                    } else {
+                        "far".to_string()
+                    }
                 )),
                 ..e
             });

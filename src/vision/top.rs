@@ -516,7 +516,10 @@ pub fn inspect_top<P: Px>(
                 .map(|(t, b)| contrast_ratio(m.hi, t, b));
             pr.status = if ar < ta_lo || ar > ta_hi {
                 pr.reason = Some(format!(
-                    "tip area {ar:.2} × nominal, outside tip_area [{ta_lo}, {ta_hi}]"
+                    "tip area {ar:.2} × nominal, outside tip_area [{ta_lo}, {ta_hi}]{}",
+                    pr.contrast_ratio
+                        .map(|r| format!("; level {r:.2} of the local tip level"))
+                        .unwrap_or_default()
                 ));
                 PinStatus::Damaged
             } else if off > tol.position_mm {
@@ -659,9 +662,15 @@ pub fn inspect_top<P: Px>(
             ignored.push(e);
         } else {
             e.reason = Some(format!(
-                "area {ar:.2} of a tip ≥ {}, level {} of the local tip level, {snr:.0} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2})",
+                "area {ar:.2} of a tip ≥ {}, level {} of the local tip level, {} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2})",
                 rule.min_area_ratio,
                 rho.map_or("n/a".to_string(), |r| format!("{r:.2}")),
+                // A noise-free floor (a clean rendering) has no finite SNR.
+                if snr.is_finite() {
+                    format!("{snr:.0}")
+                } else {
+                    "∞".to_string()
+                },
             ));
             extras.push(e);
         }

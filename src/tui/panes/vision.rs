@@ -53,6 +53,9 @@ pub(super) fn vision(
     if let Some(e) = &v.error {
         lines.push(Line::styled(e.clone(), theme.error()));
     }
+    for w in &v.failed_because {
+        lines.push(Line::styled(format!("✗ {w}"), theme.error()));
+    }
     if let Some((w, h)) = v.size {
         lines.push(kv_line("image", format!("{w}×{h} px"), theme));
     }
