@@ -20,7 +20,7 @@ use crate::engine::calibrate::calibrate_job;
 use crate::overlay::calibrate::{CalibrateOptions, CalibrationReport};
 pub use crate::overlay::outputs::calibration_text as summary_text;
 use crate::progress::{Progress, ProgressBarGuard};
-use anyhow::{anyhow, bail};
+use anyhow::bail;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -83,48 +83,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         return Ok(ExitCode::SUCCESS);
     }
-    let logs = crate::plant::log_batch::log_batch(shard, &args.logs);
-    if !shard.is_whole() {
-        eprintln!("shard {shard}: {} log(s)", logs.len());
-    }
-    let mut failed = 0;
-    let mut reports = Vec::new();
-    for l in &logs {
-        let r = match &l.missing {
-            Some(why) => Err(anyhow!("{}: {why}", l.path.display())),
-            None => calibrate_one(&args, &l.path),
-        };
-        let r = r.and_then(|report| {
-            if let Some(dir) = &args.out {
-                let mut out = crate::output::Report::new_in(&dir.join(&l.name))?;
-                out.add("params.toml", report.params_toml.as_bytes())?;
-                out.add("calibration.json", &serde_json::to_vec_pretty(&report)?)?;
-                out.commit()?;
-            }
-            Ok(report)
-        });
-        match r {
-            Ok(report) => {
-                if !args.json {
-                    outp!("{}", summary_text(&report))?;
-                }
-                reports.push(serde_json::json!({"file": l.path, "report": report}));
-            }
-            Err(e) => {
-                failed += 1;
-                let e = crate::cli::error_text(&e);
-                eprintln!("error: {e}");
-                reports.push(serde_json::json!({"file": l.path, "error": e}));
-            }
+    super::common::run_log_batch(shard, &args.logs, args.json, |l| {
+        let report = calibrate_one(&args, &l.path)?;
+        if let Some(dir) = &args.out {
+            let mut out = crate::output::Report::new_in(&dir.join(&l.name))?;
+            out.add("params.toml", report.params_toml.as_bytes())?;
+            out.add("calibration.json", &serde_json::to_vec_pretty(&report)?)?;
+            out.commit()?;
         }
-    }
-    if args.json {
-        outln!("{}", serde_json::to_string_pretty(&reports)?)?;
-    }
-    Ok(if failed > 0 {
-        ExitCode::from(3)
-    } else {
-        ExitCode::SUCCESS
+        let text = summary_text(&report);
+        Ok((report, text))
     })
 }
 

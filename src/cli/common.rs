@@ -382,3 +382,50 @@ impl SolverArgs {
         })
     }
 }
+
+/// The logs of one shard (`calibrate` and `overlay` over several logs),
+/// each run by `one`, which returns its report and the text to print: a
+/// missing log or a failed run is listed as an error and the others go on.
+/// With `json` one array of `{file, report}` / `{file, error}` is printed at
+/// the end. Exit status 3 when any log failed.
+pub fn run_log_batch<R: serde::Serialize>(
+    shard: crate::plant::shard::Shard,
+    inputs: &[PathBuf],
+    json: bool,
+    mut one: impl FnMut(&crate::plant::log_batch::BatchLog) -> anyhow::Result<(R, String)>,
+) -> anyhow::Result<std::process::ExitCode> {
+    let logs = crate::plant::log_batch::log_batch(shard, inputs);
+    if !shard.is_whole() {
+        eprintln!("shard {shard}: {} log(s)", logs.len());
+    }
+    let mut failed = 0;
+    let mut reports = Vec::new();
+    for l in &logs {
+        let r = match &l.missing {
+            Some(why) => Err(anyhow::anyhow!("{}: {why}", l.path.display())),
+            None => one(l),
+        };
+        match r {
+            Ok((report, text)) => {
+                if !json {
+                    outp!("{text}")?;
+                }
+                reports.push(serde_json::json!({"file": l.path, "report": report}));
+            }
+            Err(e) => {
+                failed += 1;
+                let e = crate::cli::error_text(&e);
+                eprintln!("error: {e}");
+                reports.push(serde_json::json!({"file": l.path, "error": e}));
+            }
+        }
+    }
+    if json {
+        outln!("{}", serde_json::to_string_pretty(&reports)?)?;
+    }
+    Ok(if failed > 0 {
+        std::process::ExitCode::from(3)
+    } else {
+        std::process::ExitCode::SUCCESS
+    })
+}

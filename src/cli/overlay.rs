@@ -150,40 +150,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.mcap.is_some() {
         bail!("--mcap takes one log (one file per log): run the logs one at a time");
     }
-    let logs = crate::plant::log_batch::log_batch(shard, &args.logs);
-    if !shard.is_whole() {
-        eprintln!("shard {shard}: {} log(s)", logs.len());
-    }
-    let mut failed = 0;
-    let mut reports = Vec::new();
-    for l in &logs {
+    super::common::run_log_batch(shard, &args.logs, args.json, |l| {
         let dir = args.out.as_ref().map(|d| d.join(&l.name));
-        let r = match &l.missing {
-            Some(why) => Err(anyhow!("{}: {why}", l.path.display())),
-            None => overlay_one(&args, &l.path, dir.as_deref(), None),
-        };
-        match r {
-            Ok(report) => {
-                if !args.json {
-                    outp!("{}", summary_text(&report, dir.as_deref()))?;
-                }
-                reports.push(serde_json::json!({"file": l.path, "report": report}));
-            }
-            Err(e) => {
-                failed += 1;
-                let e = crate::cli::error_text(&e);
-                eprintln!("error: {e}");
-                reports.push(serde_json::json!({"file": l.path, "error": e}));
-            }
-        }
-    }
-    if args.json {
-        outln!("{}", serde_json::to_string_pretty(&reports)?)?;
-    }
-    Ok(if failed > 0 {
-        ExitCode::from(3)
-    } else {
-        ExitCode::SUCCESS
+        let report = overlay_one(&args, &l.path, dir.as_deref(), None)?;
+        let text = summary_text(&report, dir.as_deref());
+        Ok((report, text))
     })
 }
 
