@@ -64,6 +64,19 @@ pub struct Joint {
     pub f_rod: [f64; 2],
 }
 
+/// What [`ClearanceModel::rod_and_bar`] gives: the rod's angular
+/// acceleration, the stroke s, the guide friction, the process load, the
+/// pin bar's acceleration and the crank torque M12.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RodAndBar {
+    pub alpha3: f64,
+    pub s: f64,
+    pub f_guide: f64,
+    pub f_proc: f64,
+    pub a4: f64,
+    pub m12: f64,
+}
+
 /// The clearance-joint model with its constants resolved.
 #[derive(Debug, Clone)]
 pub struct ClearanceModel {
@@ -277,13 +290,27 @@ impl ClearanceModel {
         self.evaluate_in(self.mode, t, y, dy)
     }
 
-    /// The full evaluation in a given mode. Inlined into the right-hand side,
-    /// where the outputs it does not need are then never computed.
+    /// The rod's angular acceleration (moments about the crank pin A), the
+    /// pin bar's balance (guide friction, process load or the part holding
+    /// it) and the crank torque M12 from the crank's balance (F_A = m3 a_G3 −
+    /// F_rod − m3 g), for the crank pin at `a` accelerating at `aa`. Shared
+    /// by the constant-speed model and the motor level, which calls it with
+    /// the part of `aa` without α2 (and adds α2's share itself).
     #[inline(always)]
-    pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
-        let theta2 = self.theta2(t);
-        let (s2, c2) = self.sc2.get(theta2);
-        let Geometry { r, l, .. } = self.geom;
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn rod_and_bar(
+        &self,
+        mode: Mode,
+        joint: &Joint,
+        a: [f64; 2],
+        aa: [f64; 2],
+        (s2, c2): (f64, f64),
+        (s3, c3): (f64, f64),
+        omega3: f64,
+        x4: f64,
+        v4: f64,
+    ) -> RodAndBar {
+        let Geometry { l, .. } = self.geom;
         let Inertia {
             m2,
             lc2,
@@ -293,25 +320,14 @@ impl ClearanceModel {
             g,
             ..
         } = self.inertia;
-        let w = self.omega;
-        let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
-        let (s3, c3) = self.sc3.get(theta3);
-        // Crank pin A.
-        let a = [r * c2, r * s2];
-        let va = [-r * w * s2, r * w * c2];
-        let aa = [-r * w * w * c2, -r * w * w * s2];
         let Joint {
-            ecc,
-            delta,
-            delta_dot,
             n,
             tt,
             f_n,
             f_t,
-            v_t,
             f_rod,
             ..
-        } = self.joint(mode, a, va, s3, c3, omega3, x4, v4);
+        } = *joint;
         // Rod: moments about A.
         let ba = [l * c3, l * s3];
         let qa = [ba[0] + self.rb * n[0], ba[1] + self.rb * n[1]];
@@ -343,6 +359,48 @@ impl ClearanceModel {
         ];
         let g2 = [lc2 * c2, lc2 * s2];
         let m12 = cross(a, f_a) - cross(g2, [m2 * g[0], m2 * g[1]]);
+        RodAndBar {
+            alpha3,
+            s,
+            f_guide,
+            f_proc,
+            a4,
+            m12,
+        }
+    }
+
+    /// The full evaluation in a given mode. Inlined into the right-hand side,
+    /// where the outputs it does not need are then never computed.
+    #[inline(always)]
+    pub fn evaluate_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) -> Outputs {
+        let theta2 = self.theta2(t);
+        let (s2, c2) = self.sc2.get(theta2);
+        let r = self.geom.r;
+        let w = self.omega;
+        let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
+        let (s3, c3) = self.sc3.get(theta3);
+        // Crank pin A.
+        let a = [r * c2, r * s2];
+        let va = [-r * w * s2, r * w * c2];
+        let aa = [-r * w * w * c2, -r * w * w * s2];
+        let joint = self.joint(mode, a, va, s3, c3, omega3, x4, v4);
+        let Joint {
+            ecc,
+            delta,
+            delta_dot,
+            f_n,
+            f_t,
+            v_t,
+            ..
+        } = joint;
+        let RodAndBar {
+            alpha3,
+            s,
+            f_proc,
+            a4,
+            m12,
+            ..
+        } = self.rod_and_bar(mode, &joint, a, aa, (s2, c2), (s3, c3), omega3, x4, v4);
         dy[THETA3] = omega3;
         dy[OMEGA3] = alpha3;
         dy[X4] = v4;

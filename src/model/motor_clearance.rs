@@ -19,12 +19,11 @@
 //! drive's part (model/motor.rs).
 
 use super::clearance::{
-    ClearanceModel, Joint, Mode, OMEGA3, Outputs, Q_DM2, Q_S, THETA3, V4, X4, stick_event,
-    stick_switch,
+    ClearanceModel, Joint, Mode, OMEGA3, Outputs, Q_DM2, Q_S, RodAndBar, THETA3, V4, X4,
+    stick_event, stick_switch,
 };
-use super::contact::{ProcessMode, coulomb};
+use super::contact::ProcessMode;
 use super::joint_model::{EndCache, JointModel};
-use super::kinematics::Geometry;
 use super::kinetostatics::{Inertia, cross};
 use super::motor::*;
 use super::params::Params;
@@ -68,16 +67,8 @@ impl MotorClearanceModel {
         let theta2 = y[THETA2];
         let w = y[OMEGA2];
         let (s2, c2) = m.sc2.get(theta2);
-        let Geometry { r, l, .. } = m.geom;
-        let Inertia {
-            m2,
-            lc2,
-            m3,
-            lc3,
-            m4,
-            g,
-            ..
-        } = m.inertia;
+        let r = m.geom.r;
+        let Inertia { m3, lc3, .. } = m.inertia;
         let (theta3, omega3, x4, v4) = (y[THETA3], y[OMEGA3], y[X4], y[V4]);
         let (s3, c3) = m.sc3.get(theta3);
         // Crank pin A; its acceleration without α2, and per unit α2.
@@ -85,48 +76,27 @@ impl MotorClearanceModel {
         let va = [-r * w * s2, r * w * c2];
         let aa0 = [-r * w * w * c2, -r * w * w * s2];
         let e2 = [-r * s2, r * c2];
+        let joint = m.joint(mode, a, va, s3, c3, omega3, x4, v4);
         let Joint {
             ecc,
             delta,
             delta_dot,
-            n,
-            tt,
             f_n,
             f_t,
             v_t,
-            f_rod,
-        } = m.joint(mode, a, va, s3, c3, omega3, x4, v4);
-        // Rod: moments about A; α3 = α3⁰ + k3 α2.
-        let ba = [l * c3, l * s3];
-        let qa = [ba[0] + m.rb * n[0], ba[1] + m.rb * n[1]];
+            ..
+        } = joint;
+        // Rod, pin bar and M12 without α2: α3 = α3⁰ + k3 α2, M12 = M12⁰ + S α2.
+        let RodAndBar {
+            alpha3: alpha3_0,
+            s,
+            f_guide,
+            f_proc,
+            a4,
+            m12: m12_0,
+        } = m.rod_and_bar(mode, &joint, a, aa0, (s2, c2), (s3, c3), omega3, x4, v4);
         let u3 = [c3, s3];
-        let moment0 = cross(ba, [f_n * n[0], f_n * n[1]])
-            + cross(qa, [-f_t * tt[0], -f_t * tt[1]])
-            + lc3 * m3 * cross(u3, g)
-            - m3 * lc3 * cross(u3, aa0);
-        let alpha3_0 = moment0 * m.inv_j_a;
         let k3 = -m3 * lc3 * cross(u3, e2) * m.inv_j_a;
-        // Pin bar.
-        let s = x4 - m.x4_tdc;
-        let f_pin_y = -f_rod[1];
-        let n_g = (f_pin_y + m4 * g[1]).abs();
-        let f_guide = coulomb(m.mu_g, n_g, v4, m.v0, m.v1);
-        let (f_proc, a4) = if mode.process == ProcessMode::Held {
-            (-(-f_rod[0] + f_guide + m4 * g[0]), 0.0)
-        } else {
-            let f_proc = m.process.force_in(mode.process, s, v4);
-            (f_proc, (-f_rod[0] + f_guide + f_proc) * m.inv_m4 + g[0])
-        };
-        // Drive torque M12 = M12⁰ + S α2 (F_A = m3 a_G3 − F_rod − m3 g).
-        let a_g3 = m
-            .inertia
-            .rod_centroid_accel_sc(aa0, s3, c3, omega3, alpha3_0);
-        let f_a = [
-            m3 * a_g3[0] - f_rod[0] - m3 * g[0],
-            m3 * a_g3[1] - f_rod[1] - m3 * g[1],
-        ];
-        let g2 = [lc2 * c2, lc2 * s2];
-        let m12_0 = cross(a, f_a) - cross(g2, [m2 * g[0], m2 * g[1]]);
         let da_g3 = [e2[0] - lc3 * k3 * s3, e2[1] + lc3 * k3 * c3];
         let s_inertia = m.inertia.i_o() + m3 * cross(a, da_g3);
         // The crank's balance.
