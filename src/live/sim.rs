@@ -146,6 +146,18 @@ pub struct SimOptions {
     pub force_hz: f64,
     pub displacement_hz: f64,
     pub lot: String,
+    /// Told of every finished chunk (benchmarks: the flush-to-screen
+    /// latency of the live mode starts here).
+    pub on_flush: Option<std::sync::mpsc::Sender<FlushMark>>,
+}
+
+/// A chunk finished and flushed to the file.
+#[derive(Debug, Clone, Copy)]
+pub struct FlushMark {
+    /// Log time of the newest sample (spindle, force, displacement) in it.
+    pub sample_ns: u64,
+    /// When the flush returned.
+    pub at: Instant,
 }
 
 impl Default for SimOptions {
@@ -167,6 +179,7 @@ impl Default for SimOptions {
             force_hz: 10_000.0,
             displacement_hz: 10_000.0,
             lot: "LIVE".into(),
+            on_flush: None,
         }
     }
 }
@@ -462,6 +475,7 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
     let mut next_flush = opts.flush_s;
     let mut next_rotate = opts.rotate_s;
     let mut corrupt_at = opts.faults.corrupt_at_s;
+    let mut newest_sample: Option<u64> = None;
     let mut debris_rng = crate::rng::SplitMix64::<0xDEB0_1500_0000_0018>::new(opts.seed);
     let mut pool: HashMap<PoolKey, (std::sync::Arc<Vec<u8>>, Verdict)> = HashMap::new();
     let mut error: Option<String> = None;
@@ -573,6 +587,12 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
                 error = Some(e.to_string());
                 return;
             }
+            if let (Some(tx), Some(sample_ns)) = (&opts.on_flush, newest_sample) {
+                let _ = tx.send(FlushMark {
+                    sample_ns,
+                    at: Instant::now(),
+                });
+            }
             next_flush += opts.flush_s;
         }
         if next_rotate.is_some_and(|r| lt_s >= r) {
@@ -597,6 +617,8 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
         }
         if c == 3 {
             report.cycles += 1;
+        } else {
+            newest_sample = Some(newest_sample.map_or(lt, |n| n.max(lt)));
         }
         out.seq[c] += 1;
         report.messages += 1;

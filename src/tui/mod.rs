@@ -3,6 +3,8 @@
 //!
 //! - [`app`]: state, messages and the update function.
 //! - [`worker`]: background jobs (model, study, loading) with progress and cancel.
+//! - [`event_loop`]: the loop between the terminal's events, the worker,
+//!   the live follower and the frames.
 //! - [`draw`]: the screen (tabs, status line, help, prompt) and the image cache.
 //! - [`panes`]: drawing of each pane's view.
 //! - [`theme`]: colours (16-colour safe, `NO_COLOR`).
@@ -22,6 +24,7 @@ pub mod app;
 pub mod clipboard;
 pub mod config;
 pub mod draw;
+pub mod event_loop;
 pub mod fit;
 pub mod image_cache;
 pub mod input;
@@ -33,14 +36,14 @@ pub mod widgets;
 pub mod worker;
 
 use crate::panes::Session;
-use app::{App, Msg};
+use app::App;
 use draw::{ImageCache, draw_screen};
 use input::Input;
 use ratatui::Terminal;
-use ratatui::backend::{Backend, TestBackend};
+use ratatui::backend::TestBackend;
 use ratatui::buffer::Buffer;
 use std::io::Write;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 use theme::Theme;
 use worker::Worker;
 
@@ -279,117 +282,21 @@ pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
             "{colours}; images: {}; mouse {mouse}",
             img.protocol_name()
         ));
-        event_loop(
+        event_loop::drive(
             &mut terminal,
             &mut app,
-            &worker,
-            &theme,
-            &mut img,
-            &input,
-            live_rx.as_ref().map(|rx| (rx, &rules)),
+            event_loop::Context {
+                worker: &worker,
+                theme: &theme,
+                img: &mut img,
+                input: &input,
+                events: &mut event_loop::TerminalEvents,
+                live: live_rx.as_ref().map(|rx| (rx, &rules)),
+                on_frame: &mut |_| {},
+            },
         )
     })();
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     restore_terminal();
     result
-}
-
-fn event_loop<B: Backend>(
-    terminal: &mut Terminal<B>,
-    app: &mut App,
-    worker: &Worker,
-    theme: &Theme,
-    img: &mut ImageCache,
-    input: &Input,
-    // The follower's batches and the alarm rules announcing them.
-    live: Option<(
-        &std::sync::mpsc::Receiver<crate::live::LiveBatch>,
-        &crate::live::AlarmRules,
-    )>,
-) -> anyhow::Result<()>
-where
-    B::Error: Send + Sync + 'static,
-{
-    use crossterm::event::{self, Event};
-    let mut dirty = true;
-    let mut last_progress: Vec<(u64, u64, u64)> = Vec::new();
-    loop {
-        for (id, req, progress) in app.take_requests() {
-            worker.spawn(id, req, progress);
-        }
-        if dirty {
-            let view = app.view();
-            let chrome = app.chrome();
-            terminal.draw(|f| draw_screen(f, &chrome, &view, theme, img))?;
-            dirty = false;
-        }
-        if app.quit {
-            for r in &app.running {
-                r.progress.cancel();
-            }
-            return Ok(());
-        }
-        let timeout = if live.is_some() {
-            // New data arrives at any moment: look for it often.
-            Duration::from_millis(40)
-        } else if app.running.is_empty() {
-            Duration::from_millis(500)
-        } else {
-            Duration::from_millis(100)
-        };
-        if event::poll(timeout)? {
-            // Drain every pending event before drawing again.
-            loop {
-                let msg = match event::read()? {
-                    Event::Key(k) => {
-                        // A copy answered by the input layer changes the status line.
-                        dirty = true;
-                        input.key(app, k, &mut std::io::stdout())
-                    }
-                    Event::Mouse(m) => Some(Msg::Mouse(m)),
-                    Event::Paste(s) => Some(Msg::Paste(s)),
-                    Event::Resize(w, h) => Some(Msg::Resize(w, h)),
-                    _ => None,
-                };
-                if let Some(m) = msg {
-                    app.update(m);
-                    dirty = true;
-                }
-                if app.quit || !event::poll(Duration::ZERO)? {
-                    break;
-                }
-            }
-        }
-        for (id, out) in worker.poll() {
-            app.update(Msg::JobDone(id, Box::new(out)));
-            dirty = true;
-        }
-        if let Some((rx, rules)) = live {
-            for b in rx.try_iter() {
-                app.update(Msg::Live(Box::new(b)));
-                dirty = true;
-            }
-            // Raised alarms: the bell / OSC 9 when asked for.
-            if let Some(l) = app.session.live.as_mut() {
-                for a in l.announce.drain(..) {
-                    let n = rules.notification(&a);
-                    if !n.is_empty() {
-                        let mut out = std::io::stdout();
-                        let _ = out.write_all(n.as_bytes());
-                        let _ = out.flush();
-                    }
-                }
-            }
-        }
-        // Redraw for a gauge only when a job's progress moved.
-        let now: Vec<(u64, u64, u64)> = app
-            .running
-            .iter()
-            .map(|r| (r.id, r.progress.done(), r.progress.total()))
-            .collect();
-        if now != last_progress {
-            last_progress = now;
-            dirty = true;
-        }
-    }
 }
