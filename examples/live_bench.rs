@@ -112,7 +112,11 @@ fn main() -> anyhow::Result<()> {
     let mut session = Session::new("live");
     session.start_live(
         inputs.config.clone(),
-        inputs.paths.iter().map(|p| p.display().to_string()).collect(),
+        inputs
+            .paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
     );
     let rules = inputs.alarms.clone();
     let stop_follow = Arc::new(AtomicBool::new(false));
@@ -140,16 +144,20 @@ fn main() -> anyhow::Result<()> {
             },
             live: Some((&rx, &rules)),
             on_frame: &mut |app: &App| {
-                let shown = app.session.live.as_ref().and_then(|l| {
-                    Some(l.t0_ns? + (l.latest_s? * 1e9).round() as i64)
-                });
+                let shown = app
+                    .session
+                    .live
+                    .as_ref()
+                    .and_then(|l| Some(l.t0_ns? + (l.latest_s? * 1e9).round() as i64));
                 frames.push((Instant::now(), shown));
             },
         },
     )?;
     stop_follow.store(true, std::sync::atomic::Ordering::Relaxed);
     stop_rig.store(true, std::sync::atomic::Ordering::Relaxed);
-    let report = rig.join().map_err(|_| anyhow::anyhow!("the rig panicked"))?;
+    let report = rig
+        .join()
+        .map_err(|_| anyhow::anyhow!("the rig panicked"))?;
     let report = report.map_err(|e| anyhow::anyhow!(e))?;
     let cycles = app.session.live.as_ref().map_or(0, |l| l.cycles);
     let shown_images = app.session.live.as_ref().map_or(0, |l| l.images);

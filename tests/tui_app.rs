@@ -443,3 +443,134 @@ fn the_overlay_pane_calibrates_its_log_on_capital_c() {
     assert!(s.contains("clearance:"), "{s}");
     assert!(s.contains("stroke mean RMS:"), "{s}");
 }
+
+/// `tui --follow` with a config file: the `[alarms]` rules of the config
+/// are the ones the live line is judged by, and a raised alarm reaches the
+/// status line drawn by the TUI's own loop. The log runs at 1800 rpm; the
+/// config's `speed_off` rule holds a 1000 rpm set-point, so it must raise;
+/// the default rules (set-point from the log's metadata) must not.
+#[test]
+fn tui_follow_applies_the_config_alarm_rules_and_shows_them() {
+    use crossterm::event::Event;
+    use pinsight::tui::event_loop::{Context, Events, drive};
+    use std::cell::Cell;
+    use std::rc::Rc;
+    use std::time::{Duration, Instant};
+
+    struct Until {
+        done: Rc<Cell<bool>>,
+        deadline: Instant,
+    }
+    impl Events for Until {
+        fn poll(&mut self, timeout: Duration) -> std::io::Result<bool> {
+            if self.done.get() || Instant::now() >= self.deadline {
+                return Ok(true);
+            }
+            std::thread::sleep(timeout.min(Duration::from_millis(20)));
+            Ok(self.done.get())
+        }
+        fn read(&mut self) -> std::io::Result<Event> {
+            Ok(Event::Key(KeyEvent::new(
+                KeyCode::Char('c'),
+                KeyModifiers::CONTROL,
+            )))
+        }
+    }
+
+    let log = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/logs/synth-1800-ripple-dropouts-blocks.mcap");
+    // Follows the finished log until every cycle is in (or 60 s); returns
+    // the alarms raised and the last status line drawn.
+    let follow = |config_text: &str| -> (Vec<String>, String) {
+        let (config, findings) = pinsight::tui::config::Config::parse(config_text, "test.toml");
+        assert!(findings.is_empty(), "{findings:?}");
+        let inputs = pinsight::cli::watch::inputs(
+            std::slice::from_ref(&log),
+            &[],
+            None,
+            0,
+            config.follow_settings(),
+            None,
+            &pinsight::cli::common::LogReadArgs {
+                channels: None,
+                meta: Vec::new(),
+            },
+        )
+        .unwrap();
+        let mut session = Session::new("live");
+        session.start_live(inputs.config.clone(), vec![log.display().to_string()]);
+        let rules = inputs.alarms.clone();
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let rx = pinsight::tui::spawn_follower(inputs, stop.clone()).unwrap();
+        let mut app = App::new(session, 100, 30);
+        let mut terminal =
+            ratatui::Terminal::new(ratatui::backend::TestBackend::new(100, 30)).unwrap();
+        let done = Rc::new(Cell::new(false));
+        let mut raised: Vec<String> = Vec::new();
+        let mut status = String::new();
+        let worker = pinsight::tui::worker::Worker::default();
+        let input = pinsight::tui::input::Input::new(Default::default());
+        let theme = Theme::plain();
+        let mut img = ImageCache::off();
+        let mut events = Until {
+            done: done.clone(),
+            deadline: Instant::now() + Duration::from_secs(60),
+        };
+        drive(
+            &mut terminal,
+            &mut app,
+            Context {
+                worker: &worker,
+                theme: &theme,
+                img: &mut img,
+                input: &input,
+                events: &mut events,
+                live: Some((&rx, &rules)),
+                on_frame: &mut |app: &App| {
+                    let Some(l) = app.session.live.as_ref() else {
+                        return;
+                    };
+                    for a in &l.active_alarms {
+                        if !raised.iter().any(|r| r == a) {
+                            raised.push(a.to_string());
+                        }
+                    }
+                    // Every file finished: the whole log is in.
+                    if !l.files.is_empty()
+                        && l.files
+                            .iter()
+                            .all(|f| f.1 == pinsight::live::events::FileState::Finished)
+                    {
+                        done.set(true);
+                    }
+                },
+            },
+        )
+        .unwrap();
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let text = buffer_text(terminal.backend().buffer());
+        if let Some(l) = text.lines().find(|l| l.contains("cycles ·")) {
+            status = l.to_string();
+        }
+        assert!(done.get(), "the log was not followed to its end in 60 s");
+        (raised, status)
+    };
+
+    let (raised, status) = follow(
+        "[[alarms.rule]]\nkind = \"speed_off\"\ntolerance = 0.02\nconsecutive = 3\nsetpoint_rpm = 1000.0\n",
+    );
+    assert!(
+        raised.iter().any(|r| r == "speed_off"),
+        "the config's speed_off rule did not raise: {raised:?}"
+    );
+    assert!(
+        status.contains("ALARM") && status.contains("speed_off"),
+        "{status}"
+    );
+
+    let (raised, _) = follow("");
+    assert!(
+        !raised.iter().any(|r| r == "speed_off"),
+        "the default rules raised speed_off at the log's own set-point: {raised:?}"
+    );
+}

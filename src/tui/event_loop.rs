@@ -51,7 +51,11 @@ pub struct Context<'a> {
 }
 
 /// Runs the loop until the app quits.
-pub fn drive<B: Backend>(terminal: &mut Terminal<B>, app: &mut App, cx: Context) -> anyhow::Result<()>
+pub fn drive<B: Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+    cx: Context,
+) -> anyhow::Result<()>
 where
     B::Error: Send + Sync + 'static,
 {
