@@ -452,7 +452,7 @@ fn the_overlay_pane_calibrates_its_log_on_capital_c() {
 #[test]
 fn tui_follow_applies_the_config_alarm_rules_and_shows_them() {
     use crossterm::event::Event;
-    use pinsight::tui::event_loop::{Context, Events, drive};
+    use pinsight::tui::event_loop::{Events, drive_headless, quit_key};
     use std::cell::Cell;
     use std::rc::Rc;
     use std::time::{Duration, Instant};
@@ -470,10 +470,7 @@ fn tui_follow_applies_the_config_alarm_rules_and_shows_them() {
             Ok(self.done.get())
         }
         fn read(&mut self) -> std::io::Result<Event> {
-            Ok(Event::Key(KeyEvent::new(
-                KeyCode::Char('c'),
-                KeyModifiers::CONTROL,
-            )))
+            Ok(quit_key())
         }
     }
 
@@ -498,60 +495,46 @@ fn tui_follow_applies_the_config_alarm_rules_and_shows_them() {
         )
         .unwrap();
         let mut session = Session::new("live");
-        session.start_live(inputs.config.clone(), vec![log.display().to_string()]);
-        let rules = inputs.alarms.clone();
         let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-        let rx = pinsight::tui::spawn_follower(inputs, stop.clone()).unwrap();
+        let (rx, rules) = pinsight::tui::start_follow(&mut session, inputs, stop.clone()).unwrap();
         let mut app = App::new(session, 100, 30);
-        let mut terminal =
-            ratatui::Terminal::new(ratatui::backend::TestBackend::new(100, 30)).unwrap();
         let done = Rc::new(Cell::new(false));
         let mut raised: Vec<String> = Vec::new();
-        let mut status = String::new();
-        let worker = pinsight::tui::worker::Worker::default();
-        let input = pinsight::tui::input::Input::new(Default::default());
-        let theme = Theme::plain();
-        let mut img = ImageCache::off();
         let mut events = Until {
             done: done.clone(),
             deadline: Instant::now() + Duration::from_secs(60),
         };
-        drive(
-            &mut terminal,
+        let last = drive_headless(
             &mut app,
-            Context {
-                worker: &worker,
-                theme: &theme,
-                img: &mut img,
-                input: &input,
-                events: &mut events,
-                live: Some((&rx, &rules)),
-                on_frame: &mut |app: &App| {
-                    let Some(l) = app.session.live.as_ref() else {
-                        return;
-                    };
-                    for a in &l.active_alarms {
-                        if !raised.iter().any(|r| r == a) {
-                            raised.push(a.to_string());
-                        }
+            (100, 30),
+            &mut events,
+            Some((&rx, &rules)),
+            &mut |app: &App| {
+                let Some(l) = app.session.live.as_ref() else {
+                    return;
+                };
+                for a in &l.active_alarms {
+                    if !raised.iter().any(|r| r == a) {
+                        raised.push(a.to_string());
                     }
-                    // Every file finished: the whole log is in.
-                    if !l.files.is_empty()
-                        && l.files
-                            .iter()
-                            .all(|f| f.1 == pinsight::live::events::FileState::Finished)
-                    {
-                        done.set(true);
-                    }
-                },
+                }
+                // Every file finished: the whole log is in.
+                if !l.files.is_empty()
+                    && l.files
+                        .iter()
+                        .all(|f| f.1 == pinsight::live::events::FileState::Finished)
+                {
+                    done.set(true);
+                }
             },
         )
         .unwrap();
         stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        let text = buffer_text(terminal.backend().buffer());
-        if let Some(l) = text.lines().find(|l| l.contains("cycles ·")) {
-            status = l.to_string();
-        }
+        let status = buffer_text(&last)
+            .lines()
+            .find(|l| l.contains("cycles ·"))
+            .unwrap_or_default()
+            .to_string();
         assert!(done.get(), "the log was not followed to its end in 60 s");
         (raised, status)
     };

@@ -131,6 +131,7 @@ pub fn options(args: &Args) -> anyhow::Result<SimOptions> {
         force_hz: pos(args.force_hz, "--force-hz", 100_000.0)?,
         displacement_hz: pos(args.displacement_hz, "--displacement-hz", 100_000.0)?,
         lot: args.lot.clone(),
+        record_truth: args.truth.is_some(),
         on_flush: None,
     })
 }

@@ -146,6 +146,9 @@ pub struct SimOptions {
     pub force_hz: f64,
     pub displacement_hz: f64,
     pub lot: String,
+    /// Keep every connector's truth in the report (`--truth`): one entry
+    /// per cycle, so off unless asked for (a shift is 720 000 connectors).
+    pub record_truth: bool,
     /// Told of every finished chunk (benchmarks: the flush-to-screen
     /// latency of the live mode starts here).
     pub on_flush: Option<std::sync::mpsc::Sender<FlushMark>>,
@@ -179,6 +182,7 @@ impl Default for SimOptions {
             force_hz: 10_000.0,
             displacement_hz: 10_000.0,
             lot: "LIVE".into(),
+            record_truth: false,
             on_flush: None,
         }
     }
@@ -508,6 +512,9 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
             let Some(dr) = truth.draw(k) else { continue };
             let debris = debris_rng.uniform() < opts.faults.debris_rate;
             if !(images_ok || opts.images_in_log) {
+                if !opts.record_truth {
+                    continue;
+                }
                 report.connectors.push(SimConnector {
                     file: path.display().to_string(),
                     cycle: k,
@@ -538,13 +545,15 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
                     v
                 }
             };
-            report.connectors.push(SimConnector {
-                file: path.display().to_string(),
-                cycle: k,
-                fault: dr.fault,
-                debris,
-                vision: Some(verdict),
-            });
+            if opts.record_truth {
+                report.connectors.push(SimConnector {
+                    file: path.display().to_string(),
+                    cycle: k,
+                    fault: dr.fault,
+                    debris,
+                    vision: Some(verdict),
+                });
+            }
             report.images += 1;
             let img_lt = start_ns + ((tdcs[k as usize + 1] + 0.005) * 1e9).round() as u64;
             if opts.images_in_log {

@@ -34,6 +34,44 @@ impl Events for TerminalEvents {
     }
 }
 
+/// The key that ends the loop (Ctrl-C), for scripted [`Events`].
+pub fn quit_key() -> Event {
+    Event::Key(crossterm::event::KeyEvent::new(
+        crossterm::event::KeyCode::Char('c'),
+        crossterm::event::KeyModifiers::CONTROL,
+    ))
+}
+
+/// The loop on a test backend of `width` × `height` (no colour, no
+/// images, the default keys), as benchmarks and tests run it: returns the
+/// last frame.
+pub fn drive_headless(
+    app: &mut App,
+    (width, height): (u16, u16),
+    events: &mut dyn Events,
+    live: Option<(
+        &std::sync::mpsc::Receiver<crate::live::LiveBatch>,
+        &crate::live::AlarmRules,
+    )>,
+    on_frame: &mut dyn FnMut(&App),
+) -> anyhow::Result<ratatui::buffer::Buffer> {
+    let mut terminal = Terminal::new(ratatui::backend::TestBackend::new(width, height))?;
+    drive(
+        &mut terminal,
+        app,
+        Context {
+            worker: &Worker::default(),
+            theme: &Theme::plain(),
+            img: &mut ImageCache::off(),
+            input: &Input::new(Default::default()),
+            events,
+            live,
+            on_frame,
+        },
+    )?;
+    Ok(terminal.backend().buffer().clone())
+}
+
 /// What the loop runs with besides the terminal and the app.
 pub struct Context<'a> {
     pub worker: &'a Worker,

@@ -196,6 +196,28 @@ pub fn spawn_follower(
     Ok(rx)
 }
 
+/// Makes the session live and starts the follower thread: returns its
+/// batches and the alarm rules (the loop announces raised alarms by them).
+pub fn start_follow(
+    session: &mut Session,
+    inputs: crate::live::FollowInputs,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> std::io::Result<(
+    std::sync::mpsc::Receiver<crate::live::LiveBatch>,
+    crate::live::AlarmRules,
+)> {
+    session.start_live(
+        inputs.config.clone(),
+        inputs
+            .paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
+    );
+    let rules = inputs.alarms.clone();
+    Ok((spawn_follower(inputs, stop)?, rules))
+}
+
 /// Runs the TUI on a session until the user quits.
 pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
     let start = Instant::now();
@@ -209,16 +231,9 @@ pub fn run(mut session: Session, opts: Options) -> anyhow::Result<()> {
     let mut live_rx = None;
     let mut rules = crate::live::AlarmRules::default();
     if let Some(inputs) = opts.follow.clone() {
-        session.start_live(
-            inputs.config.clone(),
-            inputs
-                .paths
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect(),
-        );
-        rules = inputs.alarms.clone();
-        live_rx = Some(spawn_follower(inputs, stop.clone())?);
+        let (rx, r) = start_follow(&mut session, inputs, stop.clone())?;
+        live_rx = Some(rx);
+        rules = r;
     }
     install_panic_hook();
     let mut terminal = ratatui::try_init()?;
