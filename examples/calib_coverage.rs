@@ -7,6 +7,8 @@
 //! # the full sweep of docs/rig-logs.md ("Calibration: bias and coverage")
 //! cargo run --release --example calib_coverage -- --cases 120 --jsonl /tmp/coverage.jsonl
 //! # a fixed condition (bias at one clearance): --clearance 0.5 --rpm 1200 --cycles 30
+//! # chosen seeds, another ensemble tolerance: --seeds 30,50 --rtol 1e-6
+//! # the same logs through another laser lag: --seeds 30,50 --laser-lag-us 0
 //! ```
 
 use pinsight::overlay::calibrate::CalibrateOptions;
@@ -45,7 +47,26 @@ fn main() -> anyhow::Result<()> {
     let fixed_rpm: Option<f64> = arg(&args, "--rpm");
     let fixed_cycles: Option<usize> = arg(&args, "--cycles");
     let ideal_sensors = args.iter().any(|a| a == "--ideal-sensors");
-    let opts = CalibrateOptions::default();
+    // The laser's lag (µs) instead of the drawn one: the same log (truth,
+    // noise) seen through another lag, to check the fit does not move with it.
+    let fixed_lag_us: Option<f64> = arg(&args, "--laser-lag-us");
+    // Listed seeds instead of a range (`--seeds 30,50`).
+    let listed: Option<Vec<u64>> = arg::<String>(&args, "--seeds")
+        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect());
+    let mut opts = CalibrateOptions::default();
+    // The ensembles' integrator tolerance (to compare against the default).
+    if let Some(r) = arg::<f64>(&args, "--rtol") {
+        opts.predict.rtol = r;
+    }
+    if let Some(r) = arg::<usize>(&args, "--coarse-revs") {
+        opts.predict.revs = r;
+    }
+    if let Some(r) = arg::<usize>(&args, "--refine-per-cycle") {
+        opts.refine_cycles_factor = r;
+    }
+    if let Some(r) = arg::<usize>(&args, "--refine-min") {
+        opts.refine_revs.0 = r;
+    }
     let t = std::time::Instant::now();
     let mut out = jsonl
         .as_ref()
@@ -54,7 +75,7 @@ fn main() -> anyhow::Result<()> {
         .map(std::io::BufWriter::new);
     let mut results: Vec<CaseResult> = Vec::new();
     // Cases in parallel batches; calibrate is itself parallel inside.
-    let seeds: Vec<u64> = (first..first + cases).collect();
+    let seeds: Vec<u64> = listed.unwrap_or_else(|| (first..first + cases).collect());
     for chunk in seeds.chunks(2) {
         let rs: Vec<Result<CaseResult, String>> = chunk
             .par_iter()
@@ -68,6 +89,9 @@ fn main() -> anyhow::Result<()> {
                 }
                 if let Some(v) = fixed_cycles {
                     c.cycles = v;
+                }
+                if let Some(v) = fixed_lag_us {
+                    c.laser_lag_s = v * 1e-6;
                 }
                 if ideal_sensors {
                     c.material = "alloy_steel".into();
