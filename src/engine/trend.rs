@@ -71,7 +71,11 @@ pub struct TrendCache {
     pub entries: BTreeMap<String, HistoryPoint>,
 }
 
-const CACHE_VERSION: u32 = 1;
+/// Bumped when the calibration's settings change its results: a cache of
+/// the older settings is then set aside, so one trend never mixes
+/// calibrations of two settings (2: ensembles at rtol 1e-4, shorter force
+/// fit searches).
+const CACHE_VERSION: u32 = 2;
 
 impl TrendCache {
     /// Reads a cache file; a missing file is an empty cache, an unreadable
