@@ -586,6 +586,35 @@ pub fn lengths(widths: &[u16]) -> Vec<Constraint> {
     widths.iter().map(|w| Constraint::Length(*w)).collect()
 }
 
+/// A table of plain text in a block `area_width` wide: columns sized by
+/// `cols` and their content, every cell cut to its column, the header
+/// fitted. The caller adds the block (and a highlight when it selects).
+pub fn text_table<'a>(
+    area_width: u16,
+    header: &[&str],
+    cells: &[Vec<String>],
+    cols: &[Col],
+    theme: &Theme,
+) -> ratatui::widgets::Table<'a> {
+    let widths = column_widths(
+        area_width.saturating_sub(2),
+        cols,
+        &content_widths(header, cells),
+    );
+    let rows: Vec<ratatui::widgets::Row> = cells
+        .iter()
+        .map(|r| {
+            ratatui::widgets::Row::new(
+                r.iter()
+                    .zip(&widths)
+                    .map(|(c, w)| trunc(c, *w as usize))
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    ratatui::widgets::Table::new(rows, lengths(&widths)).header(header_row(header, &widths, theme))
+}
+
 /// A header row with every name fitted to its column.
 pub fn header_row<'a>(names: &[&str], widths: &[u16], theme: &Theme) -> ratatui::widgets::Row<'a> {
     ratatui::widgets::Row::new(

@@ -1,6 +1,7 @@
 //! Drawing of the Model pane: the clearance model run and its figures.
 
 use super::*;
+use crate::tui::widgets::text_table;
 
 pub(super) fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
     let [left, side] =
@@ -164,25 +165,14 @@ pub(super) fn model(f: &mut Frame, area: Rect, v: &ModelView, theme: &Theme) {
             .iter()
             .map(|r| vec![r.figure.clone(), r.value.clone(), r.ideal.clone()])
             .collect();
-        let widths = column_widths(
-            figs.width.saturating_sub(2),
+        let t = text_table(
+            figs.width,
+            &header,
+            &cells,
             &[Col::Fill(10), Col::Auto(5, 10), Col::Auto(5, 8)],
-            &content_widths(&header, &cells),
-        );
-        let rows: Vec<Row> = cells
-            .iter()
-            .map(|r| {
-                Row::new(
-                    r.iter()
-                        .zip(&widths)
-                        .map(|(c, w)| trunc(c, *w as usize))
-                        .collect::<Vec<_>>(),
-                )
-            })
-            .collect();
-        let t = Table::new(rows, lengths(&widths))
-            .header(header_row(&header, &widths, theme))
-            .block(block_in(figs, "Summary (reported revolutions)", theme));
+            theme,
+        )
+        .block(block_in(figs, "Summary (reported revolutions)", theme));
         f.render_widget(t, figs);
     }
     if let (true, Some(c)) = (side_chart, &v.chart) {

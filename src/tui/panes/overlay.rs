@@ -1,6 +1,7 @@
 //! Drawing of the Overlay pane: measured against predicted, cycle by cycle.
 
 use super::*;
+use crate::tui::widgets::text_table;
 
 pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme) {
     let [left, side] =
@@ -105,31 +106,20 @@ pub(super) fn overlay(f: &mut Frame, area: Rect, v: &OverlayView, theme: &Theme)
                 ]
             })
             .collect();
-        let widths = column_widths(
-            table_area.width.saturating_sub(2),
+        let t = text_table(
+            table_area.width,
+            &header,
+            &cells,
             &[
                 Col::Auto(5, 6),
                 Col::Auto(7, 9),
                 Col::Auto(7, 9),
                 Col::Fill(4),
             ],
-            &content_widths(&header, &cells),
-        );
-        let rows: Vec<Row> = cells
-            .into_iter()
-            .map(|r| {
-                Row::new(
-                    r.iter()
-                        .zip(&widths)
-                        .map(|(c, w)| trunc(c, *w as usize))
-                        .collect::<Vec<_>>(),
-                )
-            })
-            .collect();
-        let t = Table::new(rows, lengths(&widths))
-            .header(header_row(&header, &widths, theme))
-            .row_highlight_style(theme.selected())
-            .block(block("Cycles", theme));
+            theme,
+        )
+        .row_highlight_style(theme.selected())
+        .block(block("Cycles", theme));
         let mut st = TableState::default().with_selected(v.selected);
         f.render_stateful_widget(t, table_area, &mut st);
     }

@@ -1,6 +1,7 @@
 //! Drawing of the Yield pane: yield, interval, groups and worst pins.
 
 use super::*;
+use crate::tui::widgets::text_table;
 
 pub(super) fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
     let Some(r) = &v.report else {
@@ -124,30 +125,19 @@ pub(super) fn yields(f: &mut Frame, area: Rect, v: &YieldView, theme: &Theme) {
                 ]
             })
             .collect();
-        let widths = column_widths(
-            wa.width.saturating_sub(2),
+        let t = text_table(
+            wa.width,
+            &header,
+            &cells,
             &[
                 Col::Fill(8),
                 Col::Auto(3, 5),
                 Col::Auto(5, 7),
                 Col::Auto(7, 10),
             ],
-            &content_widths(&header, &cells),
-        );
-        let rows: Vec<Row> = cells
-            .iter()
-            .map(|r| {
-                Row::new(
-                    r.iter()
-                        .zip(&widths)
-                        .map(|(c, w)| trunc(c, *w as usize))
-                        .collect::<Vec<_>>(),
-                )
-            })
-            .collect();
-        let t = Table::new(rows, lengths(&widths))
-            .header(header_row(&header, &widths, theme))
-            .block(block("Worst pins", theme));
+            theme,
+        )
+        .block(block("Worst pins", theme));
         f.render_widget(t, wa);
     }
     // Images by file name (the whole path is in the JSON and what `y` copies).
