@@ -8,8 +8,11 @@
 //! cargo run --release --example gen_plant -- 100000 /work/bench-plant
 //! cargo build --release
 //! cargo run --release --example plant_bench -- /work/bench-plant \
-//!     [--shards 8] [--parallel 2] [--repeat 3] [--items parquet] [--bin target/release/pinsight]
+//!     [--shards 8] [--parallel 2] [--repeat 3] [--merges 5] [--items parquet] [--bin target/release/pinsight]
 //! ```
+//!
+//! The merge is cheap next to the shards: each repetition runs it
+//! `--merges` times (default 5) into a fresh folder and keeps the median.
 //!
 //! The single run uses `--jobs P` (all the cores the shards share), each
 //! shard `--jobs 1`. The single run and the sharded run alternate
@@ -55,13 +58,17 @@ fn run(bin: &Path, args: &[String]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The number of images in a yield report (`report.items`).
-fn count_items(yield_json: &Path) -> u64 {
-    std::fs::read(yield_json)
+/// The numbers of images and of pins in a yield report (`report.items`,
+/// `report.pins_inspected`).
+fn count_items(yield_json: &Path) -> (u64, u64) {
+    let v = std::fs::read(yield_json)
         .ok()
         .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-        .and_then(|v| v["report"]["items"].as_u64())
-        .unwrap_or(0)
+        .unwrap_or_default();
+    (
+        v["report"]["items"].as_u64().unwrap_or(0),
+        v["report"]["pins_inspected"].as_u64().unwrap_or(0),
+    )
 }
 
 fn same_tree(a: &Path, b: &Path) -> anyhow::Result<bool> {
@@ -108,6 +115,8 @@ fn main() -> anyhow::Result<()> {
         PathBuf::from(arg(&args, "--bin").unwrap_or_else(|| "target/release/pinsight".into()));
     let keep = args.iter().any(|a| a == "--keep");
     let repeat: usize = arg(&args, "--repeat").map_or(Ok(3), |s| s.parse())?;
+    let merge_runs: usize = arg(&args, "--merges").map_or(Ok(5), |s| s.parse())?;
+    anyhow::ensure!(merge_runs >= 1, "--merges must be at least 1");
     anyhow::ensure!(repeat >= 1, "--repeat must be at least 1");
     let (img, rec) = (dir.join("img"), dir.join("recipe"));
     let out = |s: &str| dir.join(format!("out-{s}"));
@@ -191,10 +200,23 @@ fn main() -> anyhow::Result<()> {
         m.extend((0..n).map(|k| out(&format!("shard-{k}")).display().to_string()));
         m.push("--out".into());
         m.push(out("merged").display().to_string());
-        let t = Instant::now();
-        run(&bin, &m)?;
-        let merge = t.elapsed().as_secs_f64();
-        println!("[{rep}] merge: {merge:.2} s   load {}", load());
+        let mut times = Vec::new();
+        for _ in 0..merge_runs {
+            let _ = std::fs::remove_dir_all(out("merged"));
+            let t = Instant::now();
+            run(&bin, &m)?;
+            times.push(t.elapsed().as_secs_f64());
+        }
+        let merge = median(&mut times.clone());
+        println!(
+            "[{rep}] merge: {merge:.2} s (median of {merge_runs}: {})   load {}",
+            times
+                .iter()
+                .map(|t| format!("{t:.2}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            load()
+        );
         println!(
             "[{rep}] merged folder = single run's, byte for byte: {}",
             same_tree(&out("single"), &out("merged"))?
@@ -214,10 +236,10 @@ fn main() -> anyhow::Result<()> {
     );
     let images = size(&out("single").join("images.parquet")) + size(&out("single").join("images"));
     let pins = size(&out("single").join("pins.parquet")) + size(&out("single").join("pins"));
-    let count = count_items(&out("single").join("yield.json"));
+    let (count, pins_n) = count_items(&out("single").join("yield.json"));
     if count > 0 {
         println!(
-            "Parquet: images {:.2} MB + pins {:.2} MB for {count} images = {:.0} B per image (× 100 000 = {:.1} MB)",
+            "Parquet: images {:.2} MB + pins {:.2} MB for {count} images, {pins_n} pins = {:.0} B per image (× 100 000 = {:.1} MB)",
             images as f64 / 1e6,
             pins as f64 / 1e6,
             (images + pins) as f64 / count as f64,

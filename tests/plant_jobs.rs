@@ -1,10 +1,11 @@
 //! `--shard k/n` on the jobs besides `yield` and `monitor`, run as the
 //! cluster engines would run them (separate processes over the same
 //! inputs): `sweep`'s shards merged by `pinsight merge` give the single
-//! run's study (every byte but the wall-clock times no two runs share),
-//! and `overlay` over several logs puts each log in exactly one shard,
-//! in the folder a single run gives it, with the same files (the same
-//! bytes but the prediction's `wall_ms` in `overlay.json`).
+//! run's study byte for byte, and `overlay` over several logs puts each
+//! log in exactly one shard, in the folder a single run gives it, with the
+//! same bytes. The wall-clock times (`wall_ms`) stay out of the files
+//! (`output::json`), so a shard run again writes the same bytes (tested
+//! for both).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -50,36 +51,6 @@ fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     let mut out = BTreeMap::new();
     walk(dir, dir, &mut out);
     out
-}
-
-/// A JSON value without its `wall_ms` members (at any depth).
-fn without_wall(v: &mut serde_json::Value) {
-    match v {
-        serde_json::Value::Object(m) => {
-            m.remove("wall_ms");
-            m.values_mut().for_each(without_wall);
-        }
-        serde_json::Value::Array(a) => a.iter_mut().for_each(without_wall),
-        _ => {}
-    }
-}
-
-/// A CSV without its `wall_ms` column.
-fn csv_without_wall(text: &str) -> Vec<Vec<String>> {
-    let rows: Vec<Vec<String>> = text
-        .lines()
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect();
-    let col = rows[0]
-        .iter()
-        .position(|h| h == "wall_ms")
-        .expect("a wall_ms column");
-    rows.into_iter()
-        .map(|mut r| {
-            r.remove(col);
-            r
-        })
-        .collect()
 }
 
 fn sweep(out: &Path, shard: Option<&str>) -> Output {
@@ -130,30 +101,23 @@ fn sweep_shards_merge_to_the_single_run() {
         "the merged folder holds the single run's files"
     );
     for (name, bytes) in &w {
-        let other = &m[name];
-        if name == "sweep.json" {
-            let mut a: serde_json::Value = serde_json::from_slice(bytes).unwrap();
-            let mut b: serde_json::Value = serde_json::from_slice(other).unwrap();
-            without_wall(&mut a);
-            without_wall(&mut b);
-            assert_eq!(a, b, "sweep.json differs beyond wall_ms");
-        } else if name == "sweep.csv" {
-            let (a, b) = (
-                String::from_utf8(bytes.clone()).unwrap(),
-                String::from_utf8(other.clone()).unwrap(),
-            );
-            assert_eq!(
-                csv_without_wall(&a),
-                csv_without_wall(&b),
-                "sweep.csv differs beyond wall_ms"
-            );
-        } else {
-            assert!(
-                bytes == other,
-                "{name} differs between the single run and the merge"
-            );
-        }
+        assert!(
+            bytes == &m[name],
+            "{name} differs between the single run and the merge"
+        );
     }
+    // No wall-clock time in any file.
+    for name in ["sweep.json", "sweep.csv"] {
+        let text = String::from_utf8(w[name].clone()).unwrap();
+        assert!(!text.contains("wall_ms"), "{name}: {text:.400}");
+    }
+    // A shard run again (a failed pod retried) writes the same bytes.
+    let again = tmp.path().join("s1-again");
+    ok(&sweep(&again, Some("1/3")), &[0]);
+    assert!(
+        tree(&again) == tree(&shard(1)),
+        "a re-run of shard 1/3 differs"
+    );
 
     // A missing shard is refused, naming it, and nothing is written.
     let refused = tmp.path().join("refused");
@@ -229,20 +193,29 @@ fn overlay_shards_hold_every_log_once_as_the_single_run() {
         union.keys().collect::<Vec<_>>(),
         "the shards' folders together are the single run's"
     );
-    // Every file the same bytes but `overlay.json`, whose prediction
-    // carries its wall-clock time (`wall_ms`): the same without it.
+    // Every file the same bytes, `overlay.json` too (its prediction's
+    // wall-clock time is not written).
     for (name, bytes) in &w {
+        assert!(
+            bytes == &union[name],
+            "{name} differs between the single run and its shard"
+        );
         if name.ends_with(".json") {
-            let mut a: serde_json::Value = serde_json::from_slice(bytes).unwrap();
-            let mut b: serde_json::Value = serde_json::from_slice(&union[name]).unwrap();
-            without_wall(&mut a);
-            without_wall(&mut b);
-            assert_eq!(a, b, "{name} differs beyond wall_ms");
-        } else {
             assert!(
-                bytes == &union[name],
-                "{name} differs between the single run and its shard"
+                !String::from_utf8_lossy(bytes).contains("wall_ms"),
+                "{name}"
             );
         }
+    }
+    // A shard run again writes the same bytes.
+    let again = tmp.path().join("s0-again");
+    ok(&overlay(&again, Some("0/2")), &[0, 3]);
+    let first = tmp.path().join("s0");
+    assert_eq!(again.exists(), first.exists());
+    if first.exists() {
+        assert!(
+            tree(&again) == tree(&first),
+            "a re-run of shard 0/2 differs"
+        );
     }
 }

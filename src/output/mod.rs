@@ -17,10 +17,14 @@
 //!   after the other: each file old-or-new, a kill inside those renames can
 //!   leave a mix (docs/reliability.md).
 //!
+//! - [`json`]: JSON for report files that must be reproducible (the
+//!   wall-clock times left out).
+//!
 //! Whatever a killed run leaves (temporaries, a staging folder, the old
 //! folder moved aside) is cleaned by the next write into the same place,
 //! and anything of the user's in it is put back first.
 
 pub mod atomic;
+pub mod json;
 
 pub use atomic::{CommitMode, OutputError, Report, write_file};

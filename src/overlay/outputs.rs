@@ -298,7 +298,10 @@ pub fn write_outputs(dir: &Path, r: &OverlayReport) -> anyhow::Result<()> {
         out.add(name, text.as_bytes())?;
         Ok(())
     };
-    write("overlay.json", &serde_json::to_string_pretty(r)?)?;
+    // Without the prediction's wall-clock time: a re-run writes the same bytes.
+    let json =
+        crate::output::json::to_vec_pretty_without(r, crate::output::json::NOT_REPRODUCIBLE)?;
+    write("overlay.json", &String::from_utf8(json)?)?;
     write("cycles.csv", &cycles_csv(r))?;
     write("run.csv", &run_csv(r))?;
     write("figures.csv", &figures_csv(r))?;

@@ -5,13 +5,14 @@
 //! puts the cases back in grid order and writes the study with the single
 //! run's writer (`sweep_folder`).
 //!
-//! The merged study is the single run's except its wall-clock times
-//! (`wall_ms` of each case and of the run, which no two runs share; the
-//! merge gives the run's as the sum of the shards'): `sweep.csv` and
-//! `sweep.json` agree in every other byte and the charts are the same
-//! (`tests/plant_jobs.rs`).
+//! The merged study is the single run's, byte for byte
+//! (`tests/plant_jobs.rs`). The wall-clock times (`wall_ms` of each case
+//! and of the run), which no two runs share, stay in memory for the
+//! terminal and are kept out of every file — `sweep.json`, `sweep.csv` and
+//! the partial — so a re-run of a shard writes the same bytes too.
 
 use super::partial::{Found, Header, Partial};
+use crate::output::json::{NOT_REPRODUCIBLE, to_vec_pretty_without};
 use crate::plot::render_png;
 use crate::sim::Curves;
 use crate::sim::ensemble::{FIGURES, figure};
@@ -45,7 +46,6 @@ pub struct SweepBody {
     pub charts: bool,
     pub cases: Vec<CaseData>,
     pub ideal_curves: Vec<(f64, Curves)>,
-    pub wall_ms: f64,
 }
 
 /// The unit names of a grid's cases (their index, zero-padded: rank is
@@ -68,7 +68,7 @@ pub fn sweep_folder(
         ("sweep.csv".to_string(), csv),
         (
             "sweep.json".to_string(),
-            serde_json::to_string_pretty(result)?.into_bytes(),
+            to_vec_pretty_without(result, NOT_REPRODUCIBLE)?,
         ),
     ];
     if charts {
@@ -106,13 +106,17 @@ pub fn sweep_folder(
                     clearance_mm: c.clearance_mm,
                     motor_rpm: c.motor_rpm,
                     material: c.material.clone(),
-                    summary: c.summary.clone(),
+                    // No wall-clock time in a partial (a re-run writes
+                    // the same bytes): 0 in the summary it hands over.
+                    summary: c.summary.clone().map(|mut s| {
+                        s.wall_ms = 0.0;
+                        s
+                    }),
                     error: c.error.clone(),
                     curves: c.curves.clone(),
                 })
                 .collect(),
             ideal_curves: result.ideal_curves.clone(),
-            wall_ms: result.wall_ms,
         };
         files.push((
             super::partial::PARTIAL_FILE.into(),
@@ -130,6 +134,7 @@ pub struct MergedSweep {
 
 /// Merges one job's sweep partials (one complete set, in shard order).
 pub fn merge_sweep(set: Vec<(&Found, Partial<SweepBody>)>) -> Result<MergedSweep, String> {
+    let start = std::time::Instant::now();
     let (f0, p0) = set.first().ok_or("nothing to merge")?;
     let b0 = &p0.body;
     let same = |b: &SweepBody| {
@@ -164,10 +169,8 @@ pub fn merge_sweep(set: Vec<(&Found, Partial<SweepBody>)>) -> Result<MergedSweep
         b0.revs,
     );
     let ideal_curves = b0.ideal_curves.clone();
-    let mut wall_ms = 0.0;
     let mut cases: Vec<(u64, String, CaseData)> = Vec::new();
     for (f, p) in set {
-        wall_ms += p.body.wall_ms;
         cases.extend(
             p.body
                 .cases
@@ -210,7 +213,8 @@ pub fn merge_sweep(set: Vec<(&Found, Partial<SweepBody>)>) -> Result<MergedSweep
         revs,
         failed: cases.iter().filter(|c| c.error.is_some()).count(),
         cases,
-        wall_ms,
+        // The merge's own time (in no file).
+        wall_ms: start.elapsed().as_secs_f64() * 1e3,
         ideal_curves,
     };
     let files = sweep_folder(&result, charts, None).map_err(|e| e.to_string())?;
@@ -232,7 +236,7 @@ fn write_csv(f: &mut Vec<u8>, r: &SweepResult) -> anyhow::Result<()> {
     for name in FIGURES {
         write!(f, ",{name}")?;
     }
-    writeln!(f, ",n_impacts,steps,rejected_steps,rhs_evals,wall_ms,error")?;
+    writeln!(f, ",n_impacts,steps,rejected_steps,rhs_evals,error")?;
     for c in &r.cases {
         write!(
             f,
@@ -258,10 +262,10 @@ fn write_csv(f: &mut Vec<u8>, r: &SweepResult) -> anyhow::Result<()> {
         match &c.summary {
             Some(s) => write!(
                 f,
-                ",{},{},{},{},{:.3}",
-                s.n_impacts, s.steps, s.rejected_steps, s.rhs_evals, s.wall_ms
+                ",{},{},{},{}",
+                s.n_impacts, s.steps, s.rejected_steps, s.rhs_evals
             )?,
-            None => write!(f, ",,,,,")?,
+            None => write!(f, ",,,,")?,
         }
         let err = c.error.as_deref().unwrap_or("").replace(['"', '\n'], " ");
         writeln!(f, ",\"{err}\"")?;

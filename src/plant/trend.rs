@@ -5,15 +5,18 @@
 //! (`engine::trend::trend_report`). The partial holds each calibrated
 //! point and each log left out, with the log's place in the job's list.
 //!
-//! The merged report is the single run's except `wall_ms` (the merge says
-//! the shards' summed time), and — when one log's bytes appear in two
+//! The merged folder is the single run's, byte for byte
+//! (`tests/plant_trend.rs`), except — when one log's bytes appear in two
 //! shards — the split of `calibrated` and `cached` (the shards calibrated
 //! both copies; the merge lists the later copy as the single run does and
-//! counts one calibration less).
+//! counts one calibration less). The run's wall-clock time (`wall_ms`)
+//! stays in memory for the terminal and out of `trend.json` and the
+//! partial, so a re-run of a shard writes the same bytes.
 
 use super::partial::{Found, Header, Partial};
 use super::shard::{Shard, split_list};
 use crate::engine::trend::{TrendCache, TrendOptions, collect_logs, trend_report};
+use crate::output::json::{NOT_REPRODUCIBLE, to_vec_pretty_without};
 use crate::wear::WearModel;
 use crate::wear::history::HistoryPoint;
 use crate::wear::report::{ItemError, TrendReport};
@@ -67,7 +70,6 @@ pub struct TrendBody {
     pub logs: usize,
     pub calibrated: usize,
     pub cached: usize,
-    pub wall_ms: f64,
     /// Each calibrated log's point and each log left out, with the log's
     /// place in the job's list.
     pub points: Vec<(u64, HistoryPoint)>,
@@ -112,7 +114,7 @@ pub fn trend_folder(
     let mut files: Vec<(String, Vec<u8>)> = vec![
         (
             "trend.json".into(),
-            serde_json::to_vec_pretty(report).map_err(|e| e.to_string())?,
+            to_vec_pretty_without(report, NOT_REPRODUCIBLE).map_err(|e| e.to_string())?,
         ),
         ("history.csv".into(), report.to_csv().into_bytes()),
         ("trend.md".into(), report.to_markdown().into_bytes()),
@@ -148,7 +150,6 @@ pub fn trend_folder(
                 logs: report.logs,
                 calibrated: report.calibrated,
                 cached: report.cached,
-                wall_ms: report.wall_ms,
                 points,
                 errors,
             },
@@ -181,14 +182,13 @@ pub fn merge_trend(set: Vec<(&Found, Partial<TrendBody>)>) -> Result<MergedTrend
             ));
         }
     }
-    let (mut logs, mut calibrated, mut cached, mut wall_ms) = (0, 0, 0, 0.0);
+    let (mut logs, mut calibrated, mut cached) = (0, 0, 0);
     let mut points: Vec<(u64, &str, HistoryPoint)> = Vec::new();
     let mut errors: Vec<(u64, ItemError)> = Vec::new();
     for (f, p) in set {
         logs += p.body.logs;
         calibrated += p.body.calibrated;
         cached += p.body.cached;
-        wall_ms += p.body.wall_ms;
         points.extend(
             p.body
                 .points
@@ -240,7 +240,7 @@ pub fn merge_trend(set: Vec<(&Found, Partial<TrendBody>)>) -> Result<MergedTrend
         version: 0,
         entries: kept.iter().map(|p| (p.sha256.clone(), p.clone())).collect(),
     };
-    let mut report = trend_report(
+    let report = trend_report(
         kept,
         errors.into_iter().map(|e| e.1).collect(),
         logs,
@@ -249,7 +249,6 @@ pub fn merge_trend(set: Vec<(&Found, Partial<TrendBody>)>) -> Result<MergedTrend
         &opts,
         start,
     );
-    report.wall_ms += wall_ms;
     let mut files = trend_folder(&report, None)?;
     if report.calibrated > 0 {
         files.push(("trend-cache.json".into(), cache.to_json()));

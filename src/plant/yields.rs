@@ -25,11 +25,14 @@ use crate::vision::report::{
     csv_headers, yield_files,
 };
 use crate::vision::yield_acc::YieldAcc;
+use arrow_array::RecordBatch;
 use arrow_array::cast::AsArray;
 use arrow_array::types::UInt64Type;
-use arrow_array::{RecordBatch, UInt32Array};
 use arrow_schema::SchemaRef;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// What a yield folder holds besides the report.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -277,12 +280,18 @@ fn slice_items<'a>(
 
 /// The rows of one table from every shard's Parquet files (as checked),
 /// in batch order (`item`; rows of one item keep their order).
+///
+/// Each file is a run already in batch order (a shard writes its rows in
+/// its items' order; a partition file keeps that order), so the runs are
+/// read in parallel and merged k-way by `item` into one list of (run,
+/// row) that `interleave` copies once: no sort of every row, no
+/// intermediate concatenation. A run out of order is refused.
 fn merged_table(
     shards: &[(&Found, &YieldBody)],
     name: &str,
     schema: &SchemaRef,
 ) -> Result<RecordBatch, String> {
-    let mut batches = Vec::new();
+    let mut files = Vec::new();
     for (found, body) in shards {
         for c in &body.checks {
             let rel = if c.name == format!("{name}.parquet") {
@@ -292,20 +301,86 @@ fn merged_table(
             } else {
                 continue;
             };
-            let path = found.dir.join(&c.name);
-            let t = match rel {
-                None => crate::export::parquet::read_file(&path, schema),
-                Some(rel) => hive::read_partition_file(&path, rel, schema),
-            }
-            .map_err(|e| e.to_string())?;
-            batches.push(t);
+            files.push((found.dir.join(&c.name), rel));
         }
     }
-    let all = arrow_select::concat::concat_batches(schema, &batches).map_err(|e| e.to_string())?;
-    let items = all.column(0).as_primitive::<UInt64Type>();
-    let mut idx: Vec<u32> = (0..all.num_rows() as u32).collect();
-    idx.sort_by_key(|&i| items.value(i as usize));
-    arrow_select::take::take_record_batch(&all, &UInt32Array::from(idx)).map_err(|e| e.to_string())
+    let runs: Vec<RecordBatch> = files
+        .par_iter()
+        .map(|(path, rel)| {
+            match rel {
+                None => crate::export::parquet::read_file(path, schema),
+                Some(rel) => hive::read_partition_file(path, rel, schema),
+            }
+            .map_err(|e| e.to_string())
+        })
+        .collect::<Result<_, _>>()?;
+    let items: Vec<&[u64]> = runs
+        .iter()
+        .map(|b| b.column(0).as_primitive::<UInt64Type>().values().as_ref())
+        .collect();
+    let mut heap: BinaryHeap<Reverse<(u64, usize)>> = items
+        .iter()
+        .enumerate()
+        .filter_map(|(r, it)| it.first().map(|&v| Reverse((v, r))))
+        .collect();
+    let mut at = vec![0usize; runs.len()];
+    let mut idx = Vec::with_capacity(items.iter().map(|i| i.len()).sum());
+    while let Some(Reverse((v, r))) = heap.pop() {
+        let it = items[r];
+        let mut i = at[r];
+        while i < it.len() && it[i] == v {
+            idx.push((r, i));
+            i += 1;
+        }
+        at[r] = i;
+        if let Some(&next) = it.get(i) {
+            if next < v {
+                return Err(format!(
+                    "{}: its rows are not in batch order (item {next} after {v}): not a shard's table",
+                    files[r].0.display()
+                ));
+            }
+            heap.push(Reverse((next, r)));
+        }
+    }
+    if runs.is_empty() {
+        return Ok(RecordBatch::new_empty(schema.clone()));
+    }
+    let refs: Vec<&RecordBatch> = runs.iter().collect();
+    arrow_select::interleave::interleave_record_batch(&refs, &idx).map_err(|e| e.to_string())
+}
+
+/// The merged Parquet tables' files (none without `--items parquet`):
+/// the shards' rows in batch order, written as a single run writes them.
+fn merged_tables(
+    set: &[(&Found, Partial<YieldBody>)],
+    outputs: &YieldOutputs,
+    order: &[(u64, usize, usize)],
+) -> Result<Vec<(String, Vec<u8>)>, String> {
+    let Some(keys) = &outputs.parquet else {
+        return Ok(Vec::new());
+    };
+    let shards: Vec<(&Found, &YieldBody)> = set.iter().map(|(f, p)| (*f, &p.body)).collect();
+    let (images, pins) = rayon::join(
+        || merged_table(&shards, IMAGES, &images_schema()),
+        || merged_table(&shards, PINS, &pins_schema()),
+    );
+    let (images, pins) = (images?, pins?);
+    let want = order.iter().map(|o| o.0);
+    let have = images.column(0).as_primitive::<UInt64Type>().values();
+    if have.len() != order.len() || !have.iter().copied().eq(want) {
+        return Err(
+            "the shards' images tables do not hold exactly the items their partials index".into(),
+        );
+    }
+    let file = partition_file_name(0, 1);
+    let (a, b) = rayon::join(
+        || table_files(IMAGES, &images, keys, &file),
+        || table_files(PINS, &pins, keys, &file),
+    );
+    let mut files = a.map_err(|e| e.to_string())?;
+    files.extend(b.map_err(|e| e.to_string())?);
+    Ok(files)
 }
 
 /// Merges one job's yield partials (checked to be one complete set, in
@@ -327,23 +402,25 @@ pub fn merge_yield(set: &[(&Found, Partial<YieldBody>)]) -> Result<MergedYield, 
         }
     }
     // Every file is read and checked before anything is merged.
-    let mut texts = Vec::with_capacity(set.len());
-    for (f, p) in set {
-        let mut t = ShardText {
-            json: Vec::new(),
-            csv: Vec::new(),
-            pins: Vec::new(),
-        };
-        for c in &p.body.checks {
-            match c.name.as_str() {
-                "yield.json" => t.json = c.read(&f.dir)?,
-                "items.csv" => t.csv = c.read(&f.dir)?,
-                "pins.csv" => t.pins = c.read(&f.dir)?,
-                _ => c.verify(&f.dir)?,
+    let texts = set
+        .par_iter()
+        .map(|(f, p)| {
+            let mut t = ShardText {
+                json: Vec::new(),
+                csv: Vec::new(),
+                pins: Vec::new(),
+            };
+            for c in &p.body.checks {
+                match c.name.as_str() {
+                    "yield.json" => t.json = c.read(&f.dir)?,
+                    "items.csv" => t.csv = c.read(&f.dir)?,
+                    "pins.csv" => t.pins = c.read(&f.dir)?,
+                    _ => c.verify(&f.dir)?,
+                }
             }
-        }
-        texts.push(t);
-    }
+            Ok(t)
+        })
+        .collect::<Result<Vec<_>, String>>()?;
     let outputs = p0.body.outputs.clone();
     let mut slices = Vec::with_capacity(set.len());
     for ((f, p), t) in set.iter().zip(&texts) {
@@ -380,28 +457,14 @@ pub fn merge_yield(set: &[(&Found, Partial<YieldBody>)]) -> Result<MergedYield, 
     }
     let report = acc.report();
     let lines: Vec<ItemLines> = order.iter().map(|&(_, s, i)| slices[s][i]).collect();
-    let mut files = yield_files(&report, &lines, outputs.files, &p0.body.title)?;
-    if let Some(keys) = &outputs.parquet {
-        let shards: Vec<(&Found, &YieldBody)> = set.iter().map(|(f, p)| (*f, &p.body)).collect();
-        let images = merged_table(&shards, IMAGES, &images_schema())?;
-        let want: Vec<u64> = order.iter().map(|o| o.0).collect();
-        let have: Vec<u64> = images
-            .column(0)
-            .as_primitive::<UInt64Type>()
-            .values()
-            .to_vec();
-        if have != want {
-            return Err(
-                "the shards' images tables do not hold exactly the items their partials index"
-                    .into(),
-            );
-        }
-        let pins = merged_table(&shards, PINS, &pins_schema())?;
-        let file = partition_file_name(0, 1);
-        for (name, batch) in [(IMAGES, &images), (PINS, &pins)] {
-            files.extend(table_files(name, batch, keys, &file).map_err(|e| e.to_string())?);
-        }
-    }
+    // The report's files (text, charts) and the tables are independent:
+    // built side by side.
+    let (files, tables) = rayon::join(
+        || yield_files(&report, &lines, outputs.files, &p0.body.title),
+        || merged_tables(set, &outputs, &order),
+    );
+    let mut files = files?;
+    files.extend(tables?);
     Ok(MergedYield {
         report,
         files,

@@ -36,8 +36,9 @@ pub fn table_files(
     if keys.is_empty() {
         return Ok(vec![(format!("{name}.parquet"), write_table(batch)?)]);
     }
+    use rayon::prelude::*;
     hive::partition(batch, keys)?
-        .into_iter()
+        .into_par_iter()
         .map(|(dir, part)| Ok((format!("{name}/{dir}/{file}"), write_table(&part)?)))
         .collect()
 }
