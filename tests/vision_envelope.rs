@@ -8,7 +8,10 @@
 //! errors, median 0.081 px on these 240; 2026-11-25: 91.2 %, 98.43 %, 4
 //! errors, 0.080 px; 2026-11-26: 91.7 %, 98.43 %, 4 errors, 0.080 px; after the
 //! scale cross-check, 2026-11-26: 91.7 %, 98.36 %, 5 errors, 0.080 px, seed
-//! 200 133 newly an error, see docs/vision.md), not issue 12's targets (≥ 99.5 % verdicts,
+//! 200 133 newly an error, see docs/vision.md; after the component-tree split
+//! of tip blobs, the side view's bar rule and the generator's gradient
+//! levelled off beyond the part, 2026-11-26: 93.75 %, 99.11 %, 1 error,
+//! 0.081 px), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -89,17 +92,17 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 91.3,
+        pct(right, n) >= 93.3,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );
     assert!(
-        pct(pins - pins_wrong, pins) >= 98.3,
+        pct(pins - pins_wrong, pins) >= 99.0,
         "pin statuses right: {:.2} %",
         pct(pins - pins_wrong, pins)
     );
     assert!(
-        errors <= 5,
+        errors <= 1,
         "{errors} images inside the envelope ended as errors"
     );
     assert!(median <= 0.085, "ok-pin centre error median {median:.3} px");

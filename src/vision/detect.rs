@@ -154,16 +154,23 @@ pub fn search_coarse(
     let tip_area_c = pin_c * pin_c;
     let inside = |x: usize, y: usize| mask.is_none_or(|m| m(x, y));
     let t_otsu = otsu(&tophat, w, h);
-    // Typical tip contrast: median peak of tip-sized blobs at Otsu's level.
+    let max_dim = 4.0 * pin_c + 2.0;
+    let too_big = |b: &Blob| {
+        b.area as f64 / tip_area_c > 10.0
+            || b.width() as f64 > max_dim
+            || b.height() as f64 > max_dim
+    };
+    // Typical tip contrast: median peak of tip-sized blobs at Otsu's level
+    // (a blob too large for a tip split at higher levels, see
+    // `split_blobs`: tips joined to a bright band are tips still).
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > t_otsu && inside(x, y));
-    let mut peaks: Vec<f64> = lab
-        .blobs
+    let mut peaks: Vec<f64> = split_blobs(&lab, &tophat, w, t_otsu, &too_big)
         .iter()
         .filter(|b| {
-            let a = b.area as f64 / tip_area_c;
+            let a = b.blob.area as f64 / tip_area_c;
             (0.3..3.0).contains(&a)
         })
-        .map(|b| blob_peak(&lab, b, &tophat, w) as f64)
+        .map(|b| b.peak as f64)
         .collect();
     let tip_contrast = super::grid::median(&mut peaks)
         .map(|v| v as f32)
@@ -185,19 +192,11 @@ pub fn search_coarse(
     };
     let threshold = (0.35 * tip_contrast).max(med + 6.0 * 1.4826 * mad);
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
-    let max_dim = 4.0 * pin_c + 2.0;
-    let blobs = lab
-        .blobs
-        .iter()
+    let blobs = split_blobs(&lab, &tophat, w, threshold, &too_big)
+        .into_iter()
         .filter(|b| {
-            let a = b.area as f64 / tip_area_c;
-            (0.08..=10.0).contains(&a)
-                && (b.width() as f64) <= max_dim
-                && (b.height() as f64) <= max_dim
-        })
-        .map(|b| CoarseBlob {
-            peak: blob_peak(&lab, b, &tophat, w),
-            blob: b.clone(),
+            let a = b.blob.area as f64 / tip_area_c;
+            (0.08..=10.0).contains(&a) && !too_big(&b.blob)
         })
         .collect();
     Found {
@@ -206,6 +205,67 @@ pub fn search_coarse(
         tip_contrast,
         threshold,
         blobs,
+    }
+}
+
+/// The blobs of `lab` (labelled above `level` on `values`, `w` wide) with
+/// their peaks; a blob `too_big` for a tip is labelled again inside its
+/// own pixels at a level a third of the way up to its peak, recursively
+/// (four levels at most). A tip joined to a bright band at the first level
+/// (a one-row housing narrower than the top-hat's window stays in the
+/// top-hat as a band about a third of the tips' contrast) comes apart from
+/// it, as in a component tree; blobs not too big are returned as found.
+/// The returned blobs' `runs` are empty (they index sub-labellings).
+fn split_blobs(
+    lab: &label::Labelling,
+    values: &[f32],
+    w: usize,
+    level: f32,
+    too_big: &dyn Fn(&Blob) -> bool,
+) -> Vec<CoarseBlob> {
+    let mut out = Vec::with_capacity(lab.blobs.len());
+    split_into(lab, values, w, level, (0, 0), too_big, 0, &mut out);
+    out
+}
+
+#[allow(clippy::too_many_arguments)]
+fn split_into(
+    lab: &label::Labelling,
+    values: &[f32],
+    w: usize,
+    level: f32,
+    off: (u32, u32),
+    too_big: &dyn Fn(&Blob) -> bool,
+    depth: u32,
+    out: &mut Vec<CoarseBlob>,
+) {
+    for b in &lab.blobs {
+        let peak = blob_peak(lab, b, values, w);
+        if depth < 4 && too_big(b) && peak > level {
+            let (bw, bh) = (b.width() as usize, b.height() as usize);
+            let mut sub = vec![f32::NEG_INFINITY; bw * bh];
+            for &ri in &b.runs {
+                let r = lab.runs[ri as usize];
+                let (sy, row) = ((r.y - b.y_min) as usize, r.y as usize * w);
+                for x in r.x0..r.x1 {
+                    sub[sy * bw + (x - b.x_min) as usize] = values[row + x as usize];
+                }
+            }
+            let next = level + (peak - level) / 3.0;
+            let sl = label::label(bw, bh, |x, y| sub[y * bw + x] > next);
+            let o = (off.0 + b.x_min, off.1 + b.y_min);
+            split_into(&sl, &sub, bw, next, o, too_big, depth + 1, out);
+        } else {
+            let mut blob = b.clone();
+            blob.runs = Vec::new();
+            blob.x_min += off.0;
+            blob.x_max += off.0;
+            blob.y_min += off.1;
+            blob.y_max += off.1;
+            blob.cx += off.0 as f64;
+            blob.cy += off.1 as f64;
+            out.push(CoarseBlob { blob, peak });
+        }
     }
 }
 

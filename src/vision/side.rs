@@ -150,24 +150,30 @@ pub fn inspect_side<P: Px>(
     let mut dust_blobs = Vec::new();
     let touches_edge =
         |b: &label::Blob| (b.x_min..=b.x_max).any(|x| b.y_max as f64 >= edge_c(x as f64) - 3.5);
+    // A bar stands on the edge and is taller than wide by a good part of
+    // the recipe's height-to-width ratio (a fixed "twice as high as wide"
+    // lost the envelope's stubby pins, 1.5 mm high on 0.9 mm: every pin
+    // then was dust and the part "no pin standing"). The label stops 1.5
+    // coarse pixels above the edge, so that much is added back.
+    let bar_aspect =
+        (0.6 * recipe.tolerance.height_mm.unwrap_or(0.0) / recipe.pin_mm).clamp(0.8, 2.0);
+    let tall = |b: &label::Blob, w: f64| b.height() as f64 + 1.5 >= bar_aspect * w;
     let pin_px_prior = match pin_px_prior.take() {
         Some(p) => p,
         None => {
-            // Median width of the bars standing on the edge (at least
-            // twice as high as wide), in full-resolution pixels.
+            // Median width of the bars standing on the edge, in
+            // full-resolution pixels.
             let mut w: Vec<f64> = lab
                 .blobs
                 .iter()
-                .filter(|b| touches_edge(b) && b.height() >= 2 * b.width())
+                .filter(|b| touches_edge(b) && tall(b, b.width() as f64))
                 .map(|b| (b.area as f64 / b.height() as f64) * k as f64)
                 .collect();
             grid::median(&mut w).unwrap_or(8.0).max(3.0)
         }
     };
     for b in &lab.blobs {
-        if touches_edge(b)
-            && (b.height() as f64) >= 2.0 * (b.width() as f64).min(pin_px_prior / k as f64)
-        {
+        if touches_edge(b) && tall(b, (b.width() as f64).min(pin_px_prior / k as f64)) {
             bar_blobs.push(b.clone());
         } else {
             dust_blobs.push(b.clone());

@@ -477,6 +477,14 @@ impl EnvelopeCase {
 
     /// Vignetting (off-centre, `1 / (1 + k r²)²`, `k` set by the fall-off
     /// at the farthest corner) times a linear gradient across the part.
+    /// The gradient is drawn across the part's span; beyond the part it
+    /// levels off one span from the centre (the light stays
+    /// within 1 ± the drawn gradient over the frame). Extended linearly over
+    /// a frame many times the part's size, a 20 % gradient reached 0.05 on
+    /// one side and over 2 on the other: the back-lit housing clipped to the
+    /// backlight's level (invisible) and the frame went black, far outside
+    /// the envelope's "gradient up to 20 % across the part" (seeds 200 078,
+    /// 300 062, 300 453: side views without a visible housing).
     fn illuminate(&self, img: &mut [f32]) {
         let f = &self.factors;
         let (w, h) = (f.width as usize, f.height as usize);
@@ -505,7 +513,8 @@ impl EnvelopeCase {
             for x in 0..w {
                 let dx = x as f64 - vx;
                 let q = 1.0 + k * (dx * dx + dy * dy) / (r0 * r0);
-                let grad = 1.0 + g * ((x as f64 - cx) * gc + (y as f64 - cy) * gs);
+                let d = ((x as f64 - cx) * gc + (y as f64 - cy) * gs).clamp(-span_px, span_px);
+                let grad = 1.0 + g * d;
                 img[y * w + x] *= (grad.max(0.05) / (q * q)) as f32;
             }
         }
