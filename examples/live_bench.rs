@@ -335,7 +335,6 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
         },
     )?;
     stop.store(true, Ordering::Relaxed);
-    drop(quiet);
     let out = child.wait_with_output()?;
     let l = app.session.live.as_ref();
     println!(
