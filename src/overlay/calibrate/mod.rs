@@ -73,9 +73,11 @@ pub mod coverage;
 pub mod flywheel;
 mod force_fit;
 mod stroke_fit;
+mod types;
 
 use force_fit::*;
 use stroke_fit::*;
+pub use types::*;
 
 use super::compare::OverlayError;
 use super::predict::{PredictOptions, Prediction, noise_sigma, predict, velocity};
@@ -85,94 +87,7 @@ use crate::progress::Progress;
 use crate::rig::RigLog;
 use crate::rig::cycles::{CycleSet, ValueSource};
 use rayon::prelude::*;
-use serde::Serialize;
 use std::f64::consts::TAU;
-
-/// How to calibrate.
-#[derive(Debug, Clone, Serialize)]
-pub struct CalibrateOptions {
-    pub predict: PredictOptions,
-    /// Clearances simulated (mm); the nominal one is added.
-    pub clearance_grid_mm: Vec<f64>,
-    /// Jackknife blocks (of measured cycles and of simulated revolutions).
-    pub blocks: usize,
-    /// Fit the F_ins table (else only standoff and lag with the nominal table).
-    pub fit_f_ins: bool,
-    /// The fine grid around the coarse estimate c0: c0 × these factors …
-    pub refine_factors: Vec<f64>,
-    /// … each simulated for this many revolutions per measured cycle, within (min, max).
-    pub refine_cycles_factor: usize,
-    pub refine_revs: (usize, usize),
-    /// Also fit the flywheel inertia to the logged crank speed ripple (the
-    /// motor level, [`flywheel`]); the parameters then say driver = "motor".
-    pub flywheel: bool,
-}
-
-impl Default for CalibrateOptions {
-    fn default() -> Self {
-        CalibrateOptions {
-            predict: PredictOptions {
-                revs: 48,
-                rtol: ENSEMBLE_RTOL,
-                ..PredictOptions::default()
-            },
-            clearance_grid_mm: vec![0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0],
-            blocks: 8,
-            fit_f_ins: true,
-            refine_factors: vec![0.76, 0.87, 1.0, 1.15, 1.32],
-            refine_cycles_factor: 5,
-            refine_revs: (120, 800),
-            flywheel: false,
-        }
-    }
-}
-
-/// One estimated quantity.
-#[derive(Debug, Clone, Serialize)]
-pub struct Estimate {
-    pub name: String,
-    pub unit: String,
-    /// The value before calibration (metadata / parameter file / default).
-    pub nominal: Option<f64>,
-    pub value: f64,
-    /// Standard uncertainty.
-    pub sigma: f64,
-    /// Expanded uncertainty (~95 %): t₉₅(ν)·σ for the clearance (see the
-    /// module docs), 2σ for the others.
-    pub u95: f64,
-    pub method: String,
-}
-
-/// How well a parameter set explains the log.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct Residuals {
-    /// RMS over φ of measured − predicted spread of the stroke across cycles (mm).
-    pub stroke_spread_rms_mm: f64,
-    /// RMS over φ of measured − predicted mean stroke (mm).
-    pub stroke_mean_rms_mm: f64,
-    /// RMS of measured − predicted force over the fitted samples (N).
-    pub force_rms_n: f64,
-}
-
-/// The result of a calibration.
-#[derive(Debug, Clone, Serialize)]
-pub struct CalibrationReport {
-    pub file: String,
-    pub motor_rpm: f64,
-    pub cycles: usize,
-    pub estimates: Vec<Estimate>,
-    /// Fitted F_ins table: (depth mm, force N, σ N).
-    pub f_ins_table: Vec<(f64, f64, f64)>,
-    pub before: Residuals,
-    pub after: Residuals,
-    /// Objective of the stroke fit against clearance (the profile searched).
-    pub clearance_profile: Vec<(f64, f64)>,
-    /// The calibrated model parameters.
-    pub params: Params,
-    /// The parameter file written (TOML that `simulate` and `overlay` read).
-    pub params_toml: String,
-    pub notes: Vec<String>,
-}
 
 /// Calibrates `base` (the nominal parameters) against a log.
 pub fn calibrate(
@@ -814,26 +729,6 @@ pub fn calibrate(
         notes,
     })
 }
-
-/// The integrator's relative tolerance for the calibration's ensembles.
-/// Only statistics over many revolutions are compared (mean and spread per
-/// crank angle), and those converge at loose tolerances long before single
-/// trajectories do (the methods lab's long run; the mean spread of 6 runs ×
-/// 300 revolutions at 0.45 mm is 0.1763 mm at 1e-6 and 0.1764 at 1e-8, at
-/// 0.3 mm the same to 0.1 % down to 1e-3). 1e-4 instead of the overlay's 1e-6
-/// saves a quarter of the model time; the paired comparison over the
-/// coverage sweep's logs is in docs/rig-logs.md.
-const ENSEMBLE_RTOL: f64 = 1e-4;
-
-/// Golden-section iterations of the force fit (each a nested search: the
-/// standoff inside, the load cell's lag outside). The wide search (±2 mm,
-/// 0–400 µs) shrinks its bracket by 0.618¹⁹ ≈ 1.1·10⁻⁴: to 0.4 µm of
-/// standoff and 0.04 µs of lag, under a fiftieth of their σ (~0.02 mm,
-/// several µs); the narrow ones around a first fit (±0.3 mm, ±60 µs) by
-/// 0.618¹⁵ ≈ 7·10⁻⁴: to 0.4 µm and 0.09 µs.
-/// (They were 30, 18 and 24: the force fit was half of a calibration's time.)
-const FORCE_ITERS_WIDE: usize = 19;
-const FORCE_ITERS_NARROW: usize = 15;
 
 #[cfg(test)]
 mod tests;
