@@ -7,23 +7,14 @@
 //! (`output::json`), so a shard run again writes the same bytes (tested
 //! for both).
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn pinsight() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pinsight"));
-    for v in [
-        "PINSIGHT_SHARD",
-        "PINSIGHT_SHARDS",
-        "JOB_COMPLETION_INDEX",
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-    ] {
-        c.env_remove(v);
-    }
-    c
+    common::pinsight_unsharded()
 }
 
 fn ok(o: &Output, codes: &[i32]) {

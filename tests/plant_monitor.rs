@@ -7,6 +7,8 @@
 //! DuckDB read the cycles table and find monitor.json's cycles in it; a
 //! merge refuses partials of two jobs.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -16,17 +18,7 @@ fn root() -> &'static Path {
 }
 
 fn pinsight() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pinsight"));
-    for v in [
-        "PINSIGHT_SHARD",
-        "PINSIGHT_SHARDS",
-        "JOB_COMPLETION_INDEX",
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-    ] {
-        c.env_remove(v);
-    }
+    let mut c = common::pinsight_unsharded();
     c.current_dir(root());
     c
 }

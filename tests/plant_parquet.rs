@@ -12,6 +12,8 @@
 //!   wrote it, another recipe, another pinsight version, overlapping
 //!   shards.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -21,18 +23,7 @@ fn fixtures() -> PathBuf {
 }
 
 fn pinsight() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pinsight"));
-    for v in [
-        "PINSIGHT_SHARD",
-        "PINSIGHT_SHARDS",
-        "JOB_COMPLETION_INDEX",
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-    ] {
-        c.env_remove(v);
-    }
-    c
+    common::pinsight_unsharded()
 }
 
 /// `pinsight yield` over the interop images, the rig log with camera

@@ -5,6 +5,8 @@
 //! `pinsight merge` of the shards' partials writes the single run's folder
 //! byte for byte (its Parquet tables included).
 
+mod common;
+
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -31,14 +33,7 @@ fn run_yield(out: &Path, shard: Option<&str>, env: &[(&str, &str)]) -> std::proc
         .args(["--items", "json,csv,parquet"])
         .arg("--out")
         .arg(out);
-    for v in [
-        "PINSIGHT_SHARD",
-        "PINSIGHT_SHARDS",
-        "JOB_COMPLETION_INDEX",
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-    ] {
+    for v in common::SHARD_ENV {
         c.env_remove(v);
     }
     for (k, v) in env {

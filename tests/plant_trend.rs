@@ -12,24 +12,15 @@
 //! key), so what is tested here is the sharding, the partials and the
 //! merge; the calibration's accuracy is `tests/wear_trend.rs`'s.
 
+mod common;
+
 use pinsight::rig::synth::wear_series::WearSeries;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Output};
 
 fn pinsight() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pinsight"));
-    for v in [
-        "PINSIGHT_SHARD",
-        "PINSIGHT_SHARDS",
-        "JOB_COMPLETION_INDEX",
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_MIN",
-    ] {
-        c.env_remove(v);
-    }
-    c
+    common::pinsight_unsharded()
 }
 
 fn ok(o: &Output, codes: &[i32]) {

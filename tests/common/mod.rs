@@ -53,3 +53,24 @@ impl Rng {
         (self.next() % n.max(1) as u64) as usize
     }
 }
+
+/// The environment variables by which a job array's engines name a shard
+/// (pinsight's own, Kubernetes Indexed Jobs, Slurm arrays).
+pub const SHARD_ENV: [&str; 6] = [
+    "PINSIGHT_SHARD",
+    "PINSIGHT_SHARDS",
+    "JOB_COMPLETION_INDEX",
+    "SLURM_ARRAY_TASK_ID",
+    "SLURM_ARRAY_TASK_COUNT",
+    "SLURM_ARRAY_TASK_MIN",
+];
+
+/// The binary without [`SHARD_ENV`]: a test run inside a CI job array must
+/// not shard itself.
+pub fn pinsight_unsharded() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_pinsight"));
+    for v in SHARD_ENV {
+        c.env_remove(v);
+    }
+    c
+}
