@@ -32,36 +32,16 @@
 //! resident memory of the follower + TUI process (and of the rig's) at
 //! every eighth of the shift and the growth from the first mark to the last.
 
-use crossterm::event::Event;
 use pinsight::live::sim::{FlushMark, SimOptions};
 use pinsight::live::{AlarmRules, LiveBatch};
 use pinsight::panes::{PaneId, Session};
 use pinsight::tui::app::App;
-use pinsight::tui::event_loop::{Events, drive_headless, quit_key};
+use pinsight::tui::event_loop::{QuitWhen, drive_headless};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
-
-/// No key until `done` says so, then Ctrl-C. Waits as a terminal does:
-/// the whole timeout when nothing is typed.
-struct Quiet<F: FnMut() -> bool> {
-    done: F,
-}
-
-impl<F: FnMut() -> bool> Events for Quiet<F> {
-    fn poll(&mut self, timeout: Duration) -> std::io::Result<bool> {
-        if (self.done)() {
-            return Ok(true);
-        }
-        std::thread::sleep(timeout);
-        Ok((self.done)())
-    }
-    fn read(&mut self) -> std::io::Result<Event> {
-        Ok(quit_key())
-    }
-}
 
 fn pct(v: &[f64], p: f64) -> f64 {
     let i = ((v.len() - 1) as f64 * p).round() as usize;
@@ -167,9 +147,7 @@ fn main() -> anyhow::Result<()> {
     drive_headless(
         &mut app,
         (120, 40),
-        &mut Quiet {
-            done: || Instant::now() >= end,
-        },
+        &mut QuitWhen(|| Instant::now() >= end),
         Some((&rx, &rules)),
         &mut |app: &App| {
             let shown = app
@@ -287,15 +265,13 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
     // Ends three quiet seconds after the rig finished.
     let mut since: Option<Instant> = None;
     let mut rig_status = None;
-    let mut quiet = Quiet {
-        done: || {
-            if rig_status.is_none() {
-                rig_status = child.try_wait().ok().flatten();
-            }
-            rig_status.is_some()
-                && since.get_or_insert_with(Instant::now).elapsed() > Duration::from_secs(3)
-        },
-    };
+    let mut quiet = QuitWhen(|| {
+        if rig_status.is_none() {
+            rig_status = child.try_wait().ok().flatten();
+        }
+        rig_status.is_some()
+            && since.get_or_insert_with(Instant::now).elapsed() > Duration::from_secs(3)
+    });
     drive_headless(
         &mut app,
         (120, 40),

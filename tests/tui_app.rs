@@ -451,28 +451,10 @@ fn the_overlay_pane_calibrates_its_log_on_capital_c() {
 /// the default rules (set-point from the log's metadata) must not.
 #[test]
 fn tui_follow_applies_the_config_alarm_rules_and_shows_them() {
-    use crossterm::event::Event;
-    use pinsight::tui::event_loop::{Events, drive_headless, quit_key};
+    use pinsight::tui::event_loop::{QuitWhen, drive_headless};
     use std::cell::Cell;
     use std::rc::Rc;
     use std::time::{Duration, Instant};
-
-    struct Until {
-        done: Rc<Cell<bool>>,
-        deadline: Instant,
-    }
-    impl Events for Until {
-        fn poll(&mut self, timeout: Duration) -> std::io::Result<bool> {
-            if self.done.get() || Instant::now() >= self.deadline {
-                return Ok(true);
-            }
-            std::thread::sleep(timeout.min(Duration::from_millis(20)));
-            Ok(self.done.get())
-        }
-        fn read(&mut self) -> std::io::Result<Event> {
-            Ok(quit_key())
-        }
-    }
 
     let log = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("fixtures/logs/synth-1800-ripple-dropouts-blocks.mcap");
@@ -500,10 +482,9 @@ fn tui_follow_applies_the_config_alarm_rules_and_shows_them() {
         let mut app = App::new(session, 100, 30);
         let done = Rc::new(Cell::new(false));
         let mut raised: Vec<String> = Vec::new();
-        let mut events = Until {
-            done: done.clone(),
-            deadline: Instant::now() + Duration::from_secs(60),
-        };
+        let deadline = Instant::now() + Duration::from_secs(60);
+        let seen = done.clone();
+        let mut events = QuitWhen(move || seen.get() || Instant::now() >= deadline);
         let last = drive_headless(
             &mut app,
             (100, 30),

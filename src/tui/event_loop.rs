@@ -34,12 +34,25 @@ impl Events for TerminalEvents {
     }
 }
 
-/// The key that ends the loop (Ctrl-C), for scripted [`Events`].
-pub fn quit_key() -> Event {
-    Event::Key(crossterm::event::KeyEvent::new(
-        crossterm::event::KeyCode::Char('c'),
-        crossterm::event::KeyModifiers::CONTROL,
-    ))
+/// Scripted events for a loop with no one at the keyboard (benchmarks,
+/// tests): no key until the predicate holds, then Ctrl-C. Waits the whole
+/// timeout, as a terminal does when nothing is typed.
+pub struct QuitWhen<F: FnMut() -> bool>(pub F);
+
+impl<F: FnMut() -> bool> Events for QuitWhen<F> {
+    fn poll(&mut self, timeout: Duration) -> std::io::Result<bool> {
+        if (self.0)() {
+            return Ok(true);
+        }
+        std::thread::sleep(timeout);
+        Ok((self.0)())
+    }
+    fn read(&mut self) -> std::io::Result<Event> {
+        Ok(Event::Key(crossterm::event::KeyEvent::new(
+            crossterm::event::KeyCode::Char('c'),
+            crossterm::event::KeyModifiers::CONTROL,
+        )))
+    }
 }
 
 /// The loop on a test backend of `width` × `height` (no colour, no
