@@ -209,7 +209,15 @@ fn a_log_turning_corrupt_a_deleted_log_and_a_vanished_folder_are_findings_and_fo
     // goes on writing the unlinked file) and the image folder removed.
     std::thread::sleep(Duration::from_millis(1500));
     std::fs::remove_file(&log).unwrap();
-    std::fs::remove_dir_all(&img).unwrap();
+    // The rig may be writing an image into the folder while it is being
+    // removed (then removal reports "directory not empty"): try again, as an
+    // operator would, until the folder is gone.
+    let mut tries = 0;
+    while let Err(e) = std::fs::remove_dir_all(&img) {
+        tries += 1;
+        assert!(tries < 50, "cannot remove {}: {e}", img.display());
+        std::thread::sleep(Duration::from_millis(10));
+    }
     let s = sim.wait_with_output().unwrap();
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
     let w = watch.wait_with_output().unwrap();
