@@ -56,26 +56,6 @@ fn describe(e: &LiveEvent) -> Option<String> {
     })
 }
 
-fn channel_name(k: SignalKind) -> &'static str {
-    match k {
-        SignalKind::Angle => "angle",
-        SignalKind::Speed => "speed",
-        SignalKind::Force => "force",
-        SignalKind::Displacement => "displacement",
-        SignalKind::Cycle => "cycle",
-    }
-}
-
-fn unit(k: SignalKind) -> &'static str {
-    match k {
-        SignalKind::Angle => "rad",
-        SignalKind::Speed => "rpm",
-        SignalKind::Force => "N",
-        SignalKind::Displacement => "mm",
-        SignalKind::Cycle => "",
-    }
-}
-
 impl Session {
     /// Starts a live session (the first log is the live line's signals).
     pub fn start_live(&mut self, config: FollowConfig, sources: Vec<String>) {
@@ -117,12 +97,12 @@ impl Session {
                 if *k == SignalKind::Cycle {
                     continue;
                 }
-                let name = channel_name(*k);
+                let name = k.name();
                 let i = match set.channels.iter().position(|c| c.name == name) {
                     Some(i) => i,
                     None => {
                         set.channels
-                            .push(Channel::new(name, unit(*k), Vec::new(), Vec::new()));
+                            .push(Channel::new(name, k.unit(), Vec::new(), Vec::new()));
                         live.history.push((*k, MinMaxHistory::new(hist_cap, 0.01)));
                         set.channels.len() - 1
                     }

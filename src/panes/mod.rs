@@ -31,6 +31,7 @@ pub mod session;
 pub mod session_pane;
 pub mod signals;
 pub mod study;
+pub mod table;
 pub mod trend;
 pub mod vision;
 pub mod yields;

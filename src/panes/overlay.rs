@@ -19,7 +19,7 @@
 
 use super::chart::{ChartView, SeriesKind, SeriesView, decimate_points};
 use super::session::Session;
-use super::{PaneState, csv_num, csv_table, parse_bool, parse_usize};
+use super::{PaneState, csv_num, parse_bool, parse_usize};
 use crate::overlay::calibrate::{CalibrationReport, Residuals};
 use serde::Serialize;
 use std::sync::Arc;
@@ -61,6 +61,27 @@ pub struct CycleRow {
     pub stroke_max_mm: Option<f64>,
     pub force_max_n: Option<f64>,
     pub note: String,
+}
+
+impl super::table::Cells for CycleRow {
+    const HEADER: &'static [&'static str] = &[
+        "cycle",
+        "stroke_rms_mm",
+        "force_rms_n",
+        "stroke_max_abs_mm",
+        "force_max_abs_n",
+        "note",
+    ];
+    fn cells(&self, num: &dyn Fn(Option<f64>) -> String) -> Vec<String> {
+        vec![
+            self.index.to_string(),
+            num(self.stroke_rms_mm),
+            num(self.force_rms_n),
+            num(self.stroke_max_mm),
+            num(self.force_max_n),
+            self.note.clone(),
+        ]
+    }
 }
 
 /// The Overlay pane's view.
@@ -130,28 +151,7 @@ impl OverlayView {
     }
 
     pub fn to_csv(&self) -> String {
-        let f = |x: Option<f64>| csv_num(x, 6);
-        let row = |c: &CycleRow| {
-            vec![
-                c.index.to_string(),
-                f(c.stroke_rms_mm),
-                f(c.force_rms_n),
-                f(c.stroke_max_mm),
-                f(c.force_max_n),
-                c.note.clone(),
-            ]
-        };
-        csv_table(
-            &[
-                "cycle",
-                "stroke_rms_mm",
-                "force_rms_n",
-                "stroke_max_abs_mm",
-                "force_max_abs_n",
-                "note",
-            ],
-            self.cycles.iter().map(row),
-        )
+        super::table::csv_of(&self.cycles, &|x| csv_num(x, 6))
     }
 }
 

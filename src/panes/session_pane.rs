@@ -2,7 +2,7 @@
 //! parameter files in force, and the errors found while loading.
 
 use super::session::{FileStatus, Session};
-use super::{PaneState, csv_table, parse_usize};
+use super::{PaneState, parse_usize};
 use serde::Serialize;
 
 /// UI state: the selected file row.
@@ -30,6 +30,19 @@ pub struct FileRow {
     pub status: String,
     pub detail: String,
     pub message: String,
+}
+
+impl super::table::Cells for FileRow {
+    const HEADER: &'static [&'static str] = &["path", "kind", "status", "detail", "message"];
+    fn cells(&self, _: &dyn Fn(Option<f64>) -> String) -> Vec<String> {
+        vec![
+            self.path.clone(),
+            self.kind.clone(),
+            self.status.clone(),
+            self.detail.clone(),
+            self.message.clone(),
+        ]
+    }
 }
 
 /// A log's metadata block.
@@ -81,20 +94,7 @@ pub struct LiveView {
 
 impl SessionView {
     pub fn to_csv(&self) -> String {
-        let rows: Vec<Vec<String>> = self
-            .files
-            .iter()
-            .map(|f| {
-                vec![
-                    f.path.clone(),
-                    f.kind.clone(),
-                    f.status.clone(),
-                    f.detail.clone(),
-                    f.message.clone(),
-                ]
-            })
-            .collect();
-        csv_table(&["path", "kind", "status", "detail", "message"], &rows)
+        super::table::csv_of(&self.files, &|_| String::new())
     }
 }
 

@@ -8,7 +8,7 @@
 
 use super::chart::{BarsView, ChartView};
 use super::session::Session;
-use super::{PaneState, csv_table, fmt_opt, parse_usize};
+use super::{PaneState, fmt_opt, parse_usize};
 use crate::plot::Panel;
 use crate::sim::sweep::Factor;
 use serde::Serialize;
@@ -92,6 +92,31 @@ pub struct CaseRow {
     pub error: Option<String>,
 }
 
+impl super::table::Cells for CaseRow {
+    const HEADER: &'static [&'static str] = &[
+        "case",
+        "clearance_mm",
+        "motor_rpm",
+        "material",
+        "disp_dev_mean_mm",
+        "vel_dev_mean_mps",
+        "impacts",
+        "error",
+    ];
+    fn cells(&self, num: &dyn Fn(Option<f64>) -> String) -> Vec<String> {
+        vec![
+            self.label.clone(),
+            self.clearance_mm.to_string(),
+            self.motor_rpm.to_string(),
+            self.material.clone(),
+            num(self.disp_dev_mean_mm),
+            num(self.vel_dev_mean_mps),
+            self.impacts.map(|n| n.to_string()).unwrap_or_default(),
+            self.error.clone().unwrap_or_default(),
+        ]
+    }
+}
+
 /// The Study pane's view.
 #[derive(Debug, Clone, Serialize)]
 pub struct StudyView {
@@ -113,35 +138,7 @@ pub struct StudyView {
 
 impl StudyView {
     pub fn to_csv(&self) -> String {
-        let rows: Vec<Vec<String>> = self
-            .line
-            .iter()
-            .map(|c| {
-                vec![
-                    c.label.clone(),
-                    c.clearance_mm.to_string(),
-                    c.motor_rpm.to_string(),
-                    c.material.clone(),
-                    fmt_opt(c.disp_dev_mean_mm, 6),
-                    fmt_opt(c.vel_dev_mean_mps, 6),
-                    c.impacts.map(|n| n.to_string()).unwrap_or_default(),
-                    c.error.clone().unwrap_or_default(),
-                ]
-            })
-            .collect();
-        csv_table(
-            &[
-                "case",
-                "clearance_mm",
-                "motor_rpm",
-                "material",
-                "disp_dev_mean_mm",
-                "vel_dev_mean_mps",
-                "impacts",
-                "error",
-            ],
-            &rows,
-        )
+        super::table::csv_of(&self.line, &|x| fmt_opt(x, 6))
     }
 
     pub fn panels(&self) -> Vec<Panel> {

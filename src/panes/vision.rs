@@ -2,7 +2,7 @@
 //! coloured by verdict, a per-pin table, next/previous image.
 
 use super::session::Session;
-use super::{PaneState, csv_num, csv_table, parse_usize};
+use super::{PaneState, csv_num, parse_usize};
 use crate::vision::batch::ItemStatus;
 use serde::Serialize;
 use std::sync::Arc;
@@ -47,6 +47,37 @@ pub struct PinRow {
     pub reason: Option<String>,
 }
 
+impl super::table::Cells for PinRow {
+    const HEADER: &'static [&'static str] = &[
+        "row",
+        "col",
+        "status",
+        "x_px",
+        "y_px",
+        "dx_mm",
+        "dy_mm",
+        "offset_mm",
+        "area_ratio",
+        "height_mm",
+        "reason",
+    ];
+    fn cells(&self, num: &dyn Fn(Option<f64>) -> String) -> Vec<String> {
+        vec![
+            self.row.to_string(),
+            self.col.to_string(),
+            self.status.clone(),
+            num(self.x_px),
+            num(self.y_px),
+            num(self.dx_mm),
+            num(self.dy_mm),
+            num(self.offset_mm),
+            num(self.area_ratio),
+            num(self.height_mm),
+            self.reason.clone().unwrap_or_default(),
+        ]
+    }
+}
+
 /// The Vision pane's view.
 #[derive(Debug, Clone, Serialize)]
 pub struct VisionView {
@@ -89,38 +120,7 @@ pub struct VisionView {
 
 impl VisionView {
     pub fn to_csv(&self) -> String {
-        let f = |x: Option<f64>| csv_num(x, 4);
-        let row = |p: &PinRow| {
-            vec![
-                p.row.to_string(),
-                p.col.to_string(),
-                p.status.clone(),
-                f(p.x_px),
-                f(p.y_px),
-                f(p.dx_mm),
-                f(p.dy_mm),
-                f(p.offset_mm),
-                f(p.area_ratio),
-                f(p.height_mm),
-                p.reason.clone().unwrap_or_default(),
-            ]
-        };
-        csv_table(
-            &[
-                "row",
-                "col",
-                "status",
-                "x_px",
-                "y_px",
-                "dx_mm",
-                "dy_mm",
-                "offset_mm",
-                "area_ratio",
-                "height_mm",
-                "reason",
-            ],
-            self.pins.iter().map(row),
-        )
+        super::table::csv_of(&self.pins, &|x| csv_num(x, 4))
     }
 }
 

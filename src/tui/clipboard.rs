@@ -7,9 +7,12 @@
 //! number copied has its full precision and a label is never the cut or
 //! abbreviated form drawn at 80 columns. It is tab-separated — a header
 //! line and the row (or several rows for a figure that is a table) — so it
-//! pastes into a spreadsheet as cells and into a message as text.
+//! pastes into a spreadsheet as cells and into a message as text. A table's
+//! row is copied with the columns of the pane's CSV export
+//! ([`crate::panes::table::Cells`]), numbers at full precision.
 
 use crate::panes::PaneView;
+use crate::panes::table::Cells;
 use base64::Engine;
 
 /// What `y` copies.
@@ -39,6 +42,25 @@ fn tsv(header: &[&str], rows: &[Vec<String>]) -> String {
     out
 }
 
+/// One row of a pane's table with the export's header (full precision),
+/// after `context` columns naming where it comes from.
+fn row<R: Cells>(what: String, r: &R, context: &[(&str, String)]) -> Copied {
+    let mut header: Vec<&str> = context.iter().map(|c| c.0).collect();
+    header.extend_from_slice(R::HEADER);
+    let mut cells: Vec<String> = context.iter().map(|c| c.1.clone()).collect();
+    cells.extend(r.cells(&num));
+    Copied {
+        what,
+        text: tsv(&header, &[cells]),
+    }
+}
+
+/// All the rows of a pane's table with the export's header (full precision).
+fn rows<R: Cells>(all: &[R]) -> String {
+    let cells: Vec<Vec<String>> = all.iter().map(|r| r.cells(&num)).collect();
+    tsv(R::HEADER, &cells)
+}
+
 /// The selected row or figure of a view, or None when it has nothing
 /// selected (an empty pane, no run yet).
 pub fn selection(view: &PaneView) -> Option<Copied> {
@@ -49,17 +71,7 @@ pub fn selection(view: &PaneView) -> Option<Copied> {
     match view {
         PaneView::Session(v) => {
             let f = v.files.get(v.selected)?;
-            Some(one(
-                f.path.clone(),
-                &["file", "kind", "status", "detail", "message"],
-                vec![
-                    f.path.clone(),
-                    f.kind.clone(),
-                    f.status.clone(),
-                    f.detail.clone(),
-                    f.message.clone(),
-                ],
-            ))
+            Some(row(f.path.clone(), f, &[]))
         }
         PaneView::Signals(v) => {
             let c = v.channels.iter().find(|c| c.selected)?;
@@ -86,25 +98,7 @@ pub fn selection(view: &PaneView) -> Option<Copied> {
             ))
         }
         PaneView::Overlay(v) => match v.selected.and_then(|i| v.cycles.get(i)) {
-            Some(c) => Some(one(
-                format!("cycle {}", c.index),
-                &[
-                    "cycle",
-                    "stroke_rms_mm",
-                    "force_rms_n",
-                    "stroke_max_mm",
-                    "force_max_n",
-                    "note",
-                ],
-                vec![
-                    c.index.to_string(),
-                    num(c.stroke_rms_mm),
-                    num(c.force_rms_n),
-                    num(c.stroke_max_mm),
-                    num(c.force_max_n),
-                    c.note.clone(),
-                ],
-            )),
+            Some(c) => Some(row(format!("cycle {}", c.index), c, &[])),
             None if !v.figures.is_empty() => Some(Copied {
                 what: format!("run figures ({})", v.showing),
                 text: tsv(
@@ -131,62 +125,16 @@ pub fn selection(view: &PaneView) -> Option<Copied> {
             }
             Some(Copied {
                 what: format!("the study by {} ({} cases)", v.factor, v.line.len()),
-                text: tsv(
-                    &[
-                        "case",
-                        "clearance_mm",
-                        "motor_rpm",
-                        "material",
-                        "disp_dev_mean_mm",
-                        "vel_dev_mean_mps",
-                        "impacts",
-                        "error",
-                    ],
-                    &v.line
-                        .iter()
-                        .map(|c| {
-                            vec![
-                                c.label.clone(),
-                                c.clearance_mm.to_string(),
-                                c.motor_rpm.to_string(),
-                                c.material.clone(),
-                                num(c.disp_dev_mean_mm),
-                                num(c.vel_dev_mean_mps),
-                                c.impacts.map(|n| n.to_string()).unwrap_or_default(),
-                                c.error.clone().unwrap_or_default(),
-                            ]
-                        })
-                        .collect::<Vec<_>>(),
-                ),
+                text: rows(&v.line),
             })
         }
         PaneView::Vision(v) => {
             let p = v.pins.get(v.selected)?;
             let image = v.name.clone().unwrap_or_default();
-            Some(one(
+            Some(row(
                 format!("pin {},{}", p.row, p.col),
-                &[
-                    "image",
-                    "row",
-                    "col",
-                    "status",
-                    "dx_mm",
-                    "dy_mm",
-                    "offset_mm",
-                    "area_ratio",
-                    "height_mm",
-                ],
-                vec![
-                    image,
-                    p.row.to_string(),
-                    p.col.to_string(),
-                    p.status.clone(),
-                    num(p.dx_mm),
-                    num(p.dy_mm),
-                    num(p.offset_mm),
-                    num(p.area_ratio),
-                    num(p.height_mm),
-                ],
+                p,
+                &[("image", image)],
             ))
         }
         PaneView::Yield(v) => {
