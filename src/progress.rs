@@ -106,6 +106,23 @@ impl Progress {
     }
 }
 
+/// Sets `stop` on Ctrl-C (SIGINT) or SIGTERM, for the long-running
+/// commands that end cleanly at their next check (`rig-sim` writes its last
+/// chunk and footer, `watch` its summary); a second Ctrl-C exits at once
+/// with status 130. Unix only; a no-op elsewhere.
+pub fn stop_on_signals(stop: &Arc<AtomicBool>) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGINT, SIGTERM};
+        signal_hook::flag::register_conditional_shutdown(SIGINT, 130, stop.clone())?;
+        signal_hook::flag::register(SIGINT, stop.clone())?;
+        signal_hook::flag::register(SIGTERM, stop.clone())?;
+    }
+    #[cfg(not(unix))]
+    let _ = stop;
+    Ok(())
+}
+
 /// Draws an `indicatif` bar for a [`Progress`] on stderr while alive, only
 /// when stderr is a terminal (batch runs in CI stay quiet).
 pub struct ProgressBarGuard {

@@ -140,16 +140,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let opts = options(&args)?;
     let stop = Arc::new(AtomicBool::new(false));
     // Ctrl-C ends the run cleanly: the last chunk and the footer are written.
-    #[cfg(unix)]
-    {
-        signal_hook::flag::register_conditional_shutdown(
-            signal_hook::consts::SIGINT,
-            130,
-            stop.clone(),
-        )?;
-        signal_hook::flag::register(signal_hook::consts::SIGINT, stop.clone())?;
-        signal_hook::flag::register(signal_hook::consts::SIGTERM, stop.clone())?;
-    }
+    crate::progress::stop_on_signals(&stop)?;
     let report = simulate(&opts, &stop).map_err(|e| anyhow!(e))?;
     for w in &report.warnings {
         eprintln!("warning: {w}");

@@ -12,7 +12,7 @@ use super::entries::{
     FINDING_SEP, FileKind, FileStatus, ImageEntry, ImageSource, Loaded, LogEntry, RecipeEntry,
     entry,
 };
-use super::signals::{Channel, SignalSet, channel_name};
+use super::signals::{Channel, SignalSet};
 use crate::model::params::Params;
 use crate::progress::Progress;
 use crate::rig::cycles::CycleOptions;
@@ -180,7 +180,7 @@ fn log_items(shown: &str, log: RigLog, path: Option<&Path>) -> Vec<Loaded> {
         }
         if let Some(sig) = log.signals.get(k) {
             channels.push(Channel::new(
-                channel_name(k),
+                k.name(),
                 sig.unit.clone(),
                 sig.t_ns.iter().map(|&t| secs(t)).collect(),
                 sig.values.clone(),

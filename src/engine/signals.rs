@@ -85,18 +85,6 @@ impl SignalSet {
     }
 }
 
-/// Signals pane names of the rig signals.
-pub(crate) fn channel_name(k: crate::rig::SignalKind) -> &'static str {
-    use crate::rig::SignalKind as K;
-    match k {
-        K::Angle => "angle",
-        K::Speed => "speed",
-        K::Force => "force",
-        K::Displacement => "displacement",
-        K::Cycle => "cycle",
-    }
-}
-
 /// Per-block minima and maxima of a long series (blocks of [`BLOCK`]
 /// samples), so a column's extremes cost O(column / BLOCK + BLOCK) instead
 /// of O(column): zoomed-out views of 10⁶-sample channels stay fast.

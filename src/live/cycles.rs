@@ -95,16 +95,6 @@ pub struct CycleTracker {
     said_no_cycles: bool,
 }
 
-fn unit(k: SignalKind) -> &'static str {
-    match k {
-        SignalKind::Angle => "rad",
-        SignalKind::Speed => "rpm",
-        SignalKind::Force => "N",
-        SignalKind::Displacement => "mm",
-        SignalKind::Cycle => "",
-    }
-}
-
 impl CycleTracker {
     pub fn new(file: &str, map: ChannelMap, opts: CycleOptions, warmup: usize) -> Self {
         CycleTracker {
@@ -163,7 +153,7 @@ impl CycleTracker {
                 kind: *k,
                 topic: src.map(|s| s.topic.clone()).unwrap_or_default(),
                 field: src.map(|s| s.field.clone()).unwrap_or_default(),
-                unit: unit(*k).into(),
+                unit: k.unit().into(),
                 t_ns: s.t.clone(),
                 values: s.v.clone(),
             };
