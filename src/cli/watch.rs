@@ -200,16 +200,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         cfg.debounce_ms,
     );
     let stop = Arc::new(AtomicBool::new(false));
-    #[cfg(unix)]
-    {
-        signal_hook::flag::register_conditional_shutdown(
-            signal_hook::consts::SIGINT,
-            130,
-            stop.clone(),
-        )?;
-        signal_hook::flag::register(signal_hook::consts::SIGINT, stop.clone())?;
-        signal_hook::flag::register(signal_hook::consts::SIGTERM, stop.clone())?;
-    }
+    crate::progress::stop_on_signals(&stop)?;
     if let Some(n) = &wake.note
         && !args.json_lines
     {
@@ -258,7 +249,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             emit(&follower.poll(None).events)?;
             break;
         }
-        changed = wake.wait().changed;
+        changed = wake.next(follower.behind()).changed;
     }
     let s = follower.summary();
     if args.json_lines {

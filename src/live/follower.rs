@@ -54,6 +54,32 @@ struct LogFollow {
     bytes: u64,
 }
 
+impl LogFollow {
+    /// The log's state as the interface lists it.
+    fn file_event(&self) -> FileEvent {
+        FileEvent {
+            path: self.name.clone(),
+            state: self.state,
+            bytes: self.bytes,
+            cycles: self.tracker.reported,
+        }
+    }
+
+    /// Tells `b` the log's state (in its file list and as an event).
+    fn tell(&mut self, b: &mut LiveBatch) {
+        self.told = Some(self.state);
+        let e = self.file_event();
+        b.files.push(e.clone());
+        b.events.push(LiveEvent::File(e));
+    }
+}
+
+/// Most images inspected in one poll (a larger backlog over several): one
+/// poll's results travel to the interface as one batch, so a backlog of
+/// thousands (a camera folder found full, a follower that fell behind)
+/// must not become one batch of thousands.
+pub const IMAGES_PER_POLL: usize = 64;
+
 /// An image waiting to be inspected.
 struct ImageJob {
     item: Item,
@@ -226,6 +252,14 @@ impl Follower {
         });
     }
 
+    /// Work is left over from the last poll (a log read up to
+    /// [`crate::live::tail::MAX_READ`], images over [`IMAGES_PER_POLL`]):
+    /// poll again at once instead of waiting for the files to change.
+    pub fn behind(&self) -> bool {
+        // (An image retried because it was caught half-written waits.)
+        self.queue.iter().any(|j| j.tries == 0) || self.logs.iter().any(|l| l.tail.behind())
+    }
+
     /// Every log followed is finished (or left) and nothing is queued.
     pub fn all_finished(&self) -> bool {
         !self.logs.is_empty()
@@ -239,16 +273,7 @@ impl Follower {
     /// Counts so far.
     pub fn summary(&self) -> LiveSummary {
         let mut s = self.counts.clone();
-        s.logs = self
-            .logs
-            .iter()
-            .map(|l| FileEvent {
-                path: l.name.clone(),
-                state: l.state,
-                bytes: l.bytes,
-                cycles: l.tracker.reported,
-            })
-            .collect();
+        s.logs = self.logs.iter().map(LogFollow::file_event).collect();
         s.yields = (self.order > 0).then(|| self.yields.report());
         s
     }
@@ -495,15 +520,7 @@ impl Follower {
         b.events.extend(al.into_iter().map(LiveEvent::Alarm));
         l.state = state;
         if l.told != Some(state) {
-            l.told = Some(state);
-            let e = FileEvent {
-                path: l.name.clone(),
-                state,
-                bytes: l.bytes,
-                cycles: l.tracker.reported,
-            };
-            b.files.push(e.clone());
-            b.events.push(LiveEvent::File(e));
+            l.tell(b);
         }
     }
 
@@ -596,24 +613,18 @@ impl Follower {
             if l.state != FileState::Deleted {
                 l.state = FileState::Abandoned;
             }
-            l.told = Some(l.state);
-            let e = FileEvent {
-                path: l.name.clone(),
-                state: l.state,
-                bytes: l.bytes,
-                cycles: l.tracker.reported,
-            };
-            b.files.push(e.clone());
-            b.events.push(LiveEvent::File(e));
+            l.tell(b);
         }
     }
 
-    /// Inspects the queued images (in parallel, reported in order).
+    /// Inspects the queued images (in parallel, reported in order), at
+    /// most [`IMAGES_PER_POLL`] of them.
     fn inspect(&mut self, b: &mut LiveBatch) {
         if self.queue.is_empty() {
             return;
         }
-        let jobs: Vec<ImageJob> = self.queue.drain(..).collect();
+        let take = self.queue.len().min(IMAGES_PER_POLL);
+        let jobs: Vec<ImageJob> = self.queue.drain(..take).collect();
         let book: &RecipeBook = &self.inputs.recipes;
         let n = jobs.len();
         let opts = InspectOptions::default();
@@ -689,14 +700,7 @@ impl Follower {
                 continue;
             }
             l.state = FileState::Abandoned;
-            let e = FileEvent {
-                path: l.name.clone(),
-                state: l.state,
-                bytes: l.bytes,
-                cycles: l.tracker.reported,
-            };
-            b.files.push(e.clone());
-            b.events.push(LiveEvent::File(e));
+            l.tell(&mut b);
         }
         b
     }

@@ -29,8 +29,15 @@ use std::time::Instant;
 
 /// Seconds a suspect last chunk is given before it is reported.
 pub const SUSPECT_S: f64 = 2.0;
-/// Most bytes read in one poll (a larger backlog is read over several).
-pub const MAX_READ: u64 = 64 << 20;
+/// Most bytes read in one poll (a larger backlog is read over several,
+/// one after the other without waiting: [`McapTail::behind`]); a single
+/// record longer than this is still read whole, up to [`RECORD_LIMIT`].
+///
+/// Small on purpose: what one poll reads is decoded into one batch, and a
+/// follower that has fallen behind (a rig replayed at full speed, an
+/// interface that drew slowly) would otherwise decode minutes of signals
+/// at once, and the allocator keeps such a peak for the rest of a shift.
+pub const MAX_READ: u64 = 4 << 20;
 /// Largest record accepted (as the loader's default limit).
 pub const RECORD_LIMIT: u64 = 256 << 20;
 
@@ -81,6 +88,8 @@ pub struct McapTail {
     pub state: TailState,
     /// Searching for the next chunk from this offset after corruption.
     resync_from: Option<u64>,
+    /// The last poll left complete records for the next ([`Self::behind`]).
+    behind: bool,
     /// A last chunk that failed once: (offset, when, file length then).
     suspect: Option<(u64, Instant, u64)>,
     /// Length of the file at the last poll and when it last grew.
@@ -145,6 +154,7 @@ impl McapTail {
             pos: 0,
             state: TailState::Opening,
             resync_from: None,
+            behind: false,
             suspect: None,
             len: 0,
             last_growth: Instant::now(),
@@ -156,9 +166,11 @@ impl McapTail {
         Finding::new(sev, code, &self.name, None, Some(Place::byte(at)), text)
     }
 
-    /// Reads what was written since the last poll.
+    /// Reads what was written since the last poll (at most about
+    /// [`MAX_READ`] bytes of it).
     pub fn poll(&mut self) -> TailRead {
         let mut out = TailRead::default();
+        self.behind = false;
         if self.state == TailState::Finished {
             return out;
         }
@@ -242,7 +254,18 @@ impl McapTail {
         if len <= start {
             return out;
         }
-        let n = (len - start).min(MAX_READ) as usize;
+        let mut n = (len - start).min(MAX_READ);
+        if n < len - start && self.resync_from.is_none() {
+            // The first record whole, however long (within the limit).
+            let mut head = [0u8; 9];
+            if file.read_exact_at(&mut head, start).is_ok()
+                && let Some(rlen) = u64_at(&head, 1)
+                && rlen <= RECORD_LIMIT
+            {
+                n = n.max((9 + rlen).min(len - start));
+            }
+        }
+        let n = n as usize;
         let mut buf = vec![0u8; n];
         if let Err(e) = file.read_exact_at(&mut buf, start) {
             out.findings.push(self.finding(
@@ -422,7 +445,14 @@ impl McapTail {
         flush_run(&mut run, &mut out, &buf);
         self.pos = start + p as u64;
         out.bytes += p as u64;
+        self.behind = !eof && p > 0;
         out
+    }
+
+    /// The last poll stopped at [`MAX_READ`] with complete records still
+    /// unread: the next poll should come at once, not at the next wake-up.
+    pub fn behind(&self) -> bool {
+        self.behind
     }
 
     /// Whether a suspect last chunk at `at` has had its time (and marks it
@@ -482,5 +512,90 @@ impl McapTail {
                 ),
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcap::records::MessageHeader;
+
+    /// A finished MCAP written by the mcap crate: `n` messages of `size`
+    /// bytes in uncompressed chunks of about `chunk` bytes.
+    fn log(n: usize, size: usize, chunk: u64) -> tempfile::NamedTempFile {
+        let f = tempfile::NamedTempFile::new().unwrap();
+        let mut w = mcap::WriteOptions::new()
+            .compression(None)
+            .chunk_size(Some(chunk))
+            .create(std::io::BufWriter::new(f.reopen().unwrap()))
+            .unwrap();
+        let ch = w
+            .add_channel(0, "/blob", "application/octet-stream", &Default::default())
+            .unwrap();
+        for i in 0..n {
+            let data = vec![(i % 251) as u8; size];
+            let h = MessageHeader {
+                channel_id: ch,
+                sequence: i as u32,
+                log_time: i as u64,
+                publish_time: i as u64,
+            };
+            w.write_to_known_channel(&h, &data).unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        f
+    }
+
+    /// Polls until the tail is finished; (bytes of each poll, chunks read,
+    /// whether each poll said it was behind).
+    fn follow(path: &Path) -> (Vec<u64>, usize, Vec<bool>) {
+        let mut t = McapTail::new(path);
+        let (mut bytes, mut chunks, mut behind) = (Vec::new(), 0, Vec::new());
+        for _ in 0..1000 {
+            let r = t.poll();
+            assert!(r.findings.is_empty(), "{:?}", r.findings);
+            bytes.push(r.bytes);
+            chunks += r
+                .items
+                .iter()
+                .filter(|i| matches!(i.item.kind, ItemKind::Chunk { .. }))
+                .count();
+            behind.push(t.behind());
+            if t.state == TailState::Finished {
+                return (bytes, chunks, behind);
+            }
+        }
+        panic!("never finished: {bytes:?}");
+    }
+
+    #[test]
+    fn a_backlog_is_read_over_several_polls_each_at_most_max_read() {
+        // 12 MB in chunks of ~256 kB: three polls or more.
+        let f = log(12 * 1024, 1024, 256 << 10);
+        let len = std::fs::metadata(f.path()).unwrap().len();
+        let (bytes, chunks, behind) = follow(f.path());
+        assert!(bytes.len() >= 3, "{bytes:?}");
+        assert!(bytes.iter().all(|&b| b <= MAX_READ), "{bytes:?}");
+        // Every poll but the last leaves work for the next and says so.
+        assert!(behind[..behind.len() - 1].iter().all(|&b| b), "{behind:?}");
+        assert!(!behind[behind.len() - 1]);
+        // Every chunk read once: the mcap crate's own count.
+        let summary = mcap::Summary::read(&std::fs::read(f.path()).unwrap())
+            .unwrap()
+            .unwrap();
+        assert_eq!(chunks, summary.chunk_indexes.len());
+        // Up to the data section's end (the summary and footer are not read).
+        assert!(bytes.iter().sum::<u64>() <= len);
+    }
+
+    #[test]
+    fn a_chunk_longer_than_max_read_is_read_whole() {
+        // One chunk of ~6 MB (over the 4 MB read), then the end.
+        let f = log(6 * 1024, 1024, 64 << 20);
+        let (bytes, chunks, _) = follow(f.path());
+        assert_eq!(chunks, 1);
+        // (The file's header records come in a poll of their own.)
+        assert!(bytes.iter().any(|&b| b > MAX_READ), "{bytes:?}");
     }
 }

@@ -73,12 +73,37 @@ impl Wake {
 
     /// Waits for an event or the interval.
     pub fn wait(&mut self) -> Wakeup {
+        self.wait_up_to(None)
+    }
+
+    /// The wake-up of a follower with a backlog: does not wait; the events
+    /// already there (none: `Some(empty)`), or the interval's full listing
+    /// when it is due.
+    pub fn take(&mut self) -> Wakeup {
+        self.wait_up_to(Some(Duration::ZERO))
+    }
+
+    /// After a poll: [`Self::take`] when the follower is `behind`, else
+    /// [`Self::wait`].
+    pub fn next(&mut self, behind: bool) -> Wakeup {
+        if behind { self.take() } else { self.wait() }
+    }
+
+    fn wait_up_to(&mut self, most: Option<Duration>) -> Wakeup {
         let Some(rx) = &self.rx else {
+            // Polling only: a backlog is read on at once (the follower
+            // lists its folders in full every 30 s whatever it is told).
+            if most.is_some() {
+                return Wakeup {
+                    changed: Some(Vec::new()),
+                };
+            }
             std::thread::sleep(self.poll);
             return Wakeup { changed: None };
         };
         let left = self.poll.saturating_sub(self.last_full.elapsed());
-        match rx.recv_timeout(left) {
+        let wait = most.map_or(left, |m| m.min(left));
+        match rx.recv_timeout(wait) {
             Ok(Ok(events)) => {
                 let mut paths: Vec<PathBuf> = events.into_iter().map(|e| e.path).collect();
                 while let Ok(more) = rx.try_recv() {
@@ -93,6 +118,9 @@ impl Wake {
                     changed: Some(paths),
                 }
             }
+            Err(RecvTimeoutError::Timeout) if wait < left => Wakeup {
+                changed: Some(Vec::new()),
+            },
             Ok(Err(_)) | Err(RecvTimeoutError::Timeout) => self.full(),
             Err(RecvTimeoutError::Disconnected) => {
                 self.rx = None;

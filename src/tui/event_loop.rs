@@ -174,7 +174,9 @@ where
             dirty = true;
         }
         if let Some((rx, rules)) = live {
-            for b in rx.try_iter() {
+            // At most a queue's worth per turn, so a follower that keeps
+            // sending cannot hold the loop away from drawing and keys.
+            for b in rx.try_iter().take(super::FOLLOW_QUEUE) {
                 app.update(Msg::Live(Box::new(b)));
                 dirty = true;
             }

@@ -164,15 +164,25 @@ fn install_panic_hook() {
     }));
 }
 
+/// Batches that may wait for the interface before the follower waits too.
+///
+/// The channel is bounded so that a rig writing faster than the interface
+/// draws (a shift replayed at full speed, a slow SSH terminal) holds its
+/// data on disk, where it already is, and not in a queue in memory: the
+/// follower simply reads further when the interface has caught up. An
+/// unbounded queue was the first suspect of the 8-hour shift's growth.
+pub const FOLLOW_QUEUE: usize = 8;
+
 /// The live follower on its own thread: polls when the files change (or
-/// at its interval) and sends each batch with data to the interface; stops
-/// when `stop` is set or the interface is gone.
+/// at its interval) and sends each batch with data to the interface
+/// (waiting while [`FOLLOW_QUEUE`] batches are not taken yet); stops when
+/// `stop` is set or the interface is gone.
 pub fn spawn_follower(
     inputs: crate::live::FollowInputs,
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
 ) -> std::io::Result<std::sync::mpsc::Receiver<crate::live::LiveBatch>> {
     use std::sync::atomic::Ordering;
-    let (tx, rx) = std::sync::mpsc::channel();
+    let (tx, rx) = std::sync::mpsc::sync_channel(FOLLOW_QUEUE);
     std::thread::Builder::new()
         .name("pinsight-live".into())
         .spawn(move || {
@@ -190,7 +200,7 @@ pub fn spawn_follower(
                 if !b.is_empty() && tx.send(b).is_err() {
                     return;
                 }
-                changed = wake.wait().changed;
+                changed = wake.next(f.behind()).changed;
             }
         })?;
     Ok(rx)
