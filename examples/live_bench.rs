@@ -3,7 +3,7 @@
 //!
 //! ```sh
 //! cargo run --release --example live_bench -- [SECONDS=60] [DIR]
-//! cargo run --release --example live_bench -- shift HOURS SPINDLE_HZ SIGNAL_HZ IMAGES(0|1) [DIR]
+//! cargo run --release --example live_bench -- shift HOURS SPINDLE_HZ SIGNAL_HZ IMAGES(0|1) [DIR [RATE=max]]
 //! ```
 //!
 //! In one process, as `pinsight rig-sim` and `pinsight tui --follow` would
@@ -25,7 +25,9 @@
 //!
 //! `shift`: the memory of a whole shift, compressed. The same follower and
 //! loop, the rig (`pinsight rig-sim`, its own process as on a line)
-//! writing as fast as it can, a new file every 20 minutes
+//! writing at `RATE` (`max`: as fast as it can, which outruns the
+//! inspection of one photograph per cycle on two cores: the photographs
+//! then wait on disk; `10x`: a pace the follower keeps), a new file every 20 minutes
 //! of log time (each deleted once the follower has finished it, and each
 //! photograph once it has been inspected, as a line's archive job would:
 //! only the disk is spared, the follower's work is the same); prints the
@@ -217,6 +219,7 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
     let spindle_hz: f64 = a.get(1).and_then(|s| s.parse().ok()).unwrap_or(10_000.0);
     let signal_hz: f64 = a.get(2).and_then(|s| s.parse().ok()).unwrap_or(20_000.0);
     let with_images = a.get(3).is_none_or(|s| s != "0");
+    let rate = a.get(5).map_or("max", String::as_str);
     let mut tmp = None;
     let dir = run_dir(a.get(4), &mut tmp)?;
     let logs = dir.join("logs");
@@ -234,7 +237,7 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
         .ok_or_else(|| anyhow::anyhow!("build the binary first: cargo build --release"))?;
     let mut child = std::process::Command::new(bin)
         .args([
-            "rig-sim", "--rpm", "1500", "--rate", "max", "--rotate", "20m",
+            "rig-sim", "--rpm", "1500", "--rate", rate, "--rotate", "20m",
         ])
         .arg("--out")
         .arg(logs.join("run.mcap"))
@@ -314,7 +317,7 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
     let out = child.wait_with_output()?;
     let l = app.session.live.as_ref();
     println!(
-        "shift of {hours} h at 1500 rpm, spindle {spindle_hz} Hz, force and displacement \
+        "shift of {hours} h at 1500 rpm, rig at {rate}, spindle {spindle_hz} Hz, force and displacement \
          {signal_hz} Hz, images {}: {:.0} s wall; {} {}; followed {} cycles, {} images; \
          RSS end {} kB",
         if with_images { "one per cycle" } else { "none" },

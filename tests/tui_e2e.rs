@@ -452,7 +452,7 @@ fn every_pane_at_80x24_and_200x60_no_color_config_and_copy() {
     });
     let copied = String::from_utf8_lossy(&t.cmd(&["show-buffer"]).stdout).into_owned();
     assert!(
-        copied.starts_with("file\tkind\tstatus\tdetail\tmessage\n"),
+        copied.starts_with("path\tkind\tstatus\tdetail\tmessage\n"),
         "{copied:?}"
     );
     // Quit is remapped to `x`: `q` does nothing, `x` quits.

@@ -62,19 +62,9 @@ impl LiveDecoder {
 
     /// Schemas and channels defined outside chunks (unchunked files).
     pub fn add_defs(&mut self, schemas: Vec<SchemaDef>, channels: Vec<ChannelDef>) -> bool {
-        let mut changed = false;
-        for s in schemas {
-            if s.id != 0 && !self.schemas.contains_key(&s.id) {
-                self.schemas.insert(s.id, s);
-                changed = true;
-            }
-        }
-        for c in channels {
-            if let std::collections::btree_map::Entry::Vacant(e) = self.channels.entry(c.id) {
-                e.insert(c);
-                changed = true;
-            }
-        }
+        // (A channel defined again differently keeps its first definition.)
+        let (changed, _) =
+            crate::rig::load::merge_defs(&mut self.schemas, &mut self.channels, schemas, channels);
         if changed {
             self.plans = Arc::new(crate::rig::load::build_plans(
                 &self.channels,

@@ -7,6 +7,12 @@
 //! file modified before it is not new), so a shift's thousands of images
 //! do not grow the memory. A file copied in later with an old modification
 //! time (`cp -p`) is therefore not seen.
+//!
+//! A scan hands out at most the images its caller has room for (the
+//! follower's queue is bounded); the rest are neither remembered nor held
+//! but found again by the next scan, which lists the whole folder while
+//! any are left ([`FolderTail::behind`]). So a folder found full, or a
+//! camera faster than the inspection, costs disk, not memory.
 
 use crate::rig::report::{Finding, FindingCode, Severity};
 use crate::vision::batch::IMAGE_EXTENSIONS;
@@ -43,6 +49,9 @@ pub struct FolderTail {
     /// Images present at the first scan are read too (the run's backlog);
     /// logs present then: only the newest one.
     first: bool,
+    /// The last scan left images for a later one (no room for them), or
+    /// a scan was skipped: the next lists the whole folder.
+    pub behind: bool,
 }
 
 fn ext(p: &Path) -> String {
@@ -61,6 +70,7 @@ impl FolderTail {
             pending: Vec::new(),
             ever: false,
             first: true,
+            behind: false,
         }
     }
 
@@ -82,13 +92,20 @@ impl FolderTail {
         Ok(())
     }
 
+    /// A scan skipped by the caller (no room for images): the events it
+    /// would have looked at are made up for by a whole listing next time.
+    pub fn defer(&mut self) {
+        self.behind = true;
+    }
+
     /// Lists the folder (or, with `changed`, looks only at those paths) and
-    /// returns the files not seen before.
-    pub fn scan(&mut self, changed: Option<&[PathBuf]>) -> FolderScan {
+    /// returns the files not seen before, at most `room` images of them
+    /// (the oldest first; the others are left for a later scan).
+    pub fn scan(&mut self, changed: Option<&[PathBuf]>, room: usize) -> FolderScan {
         let mut out = FolderScan::default();
         let mut files = Vec::new();
         let listed = match changed {
-            Some(paths) if !self.first && !self.missing => {
+            Some(paths) if !self.first && !self.missing && !self.behind => {
                 for p in paths.iter().filter(|p| p.starts_with(&self.path)) {
                     let x = ext(p);
                     if x != "mcap" && !IMAGE_EXTENSIONS.contains(&x.as_str()) {
@@ -148,11 +165,17 @@ impl FolderTail {
         files.dedup_by(|a, b| a.0 == b.0);
         let mut newest_log: Option<PathBuf> = None;
         let mut held = false;
+        // The oldest image left for a later scan (no room for it).
+        let mut first_left: Option<SystemTime> = None;
         for (p, m) in files {
             if self.watermark.is_some_and(|w| m <= w) || self.seen.get(&p) == Some(&m) {
                 continue;
             }
             let is_log = ext(&p) == "mcap";
+            if !is_log && (first_left.is_some() || out.images.len() >= room) {
+                first_left.get_or_insert(m);
+                continue;
+            }
             if !is_log && (held || now.duration_since(m).unwrap_or_default() < settle) {
                 // Not settled (or after one that is not): in order, later.
                 held = true;
@@ -177,8 +200,10 @@ impl FolderTail {
             out.logs.push(l);
         }
         self.first = false;
-        // Forget old names behind a watermark.
-        let cutoff = now - Duration::from_secs(FORGET_S);
+        self.behind = first_left.is_some();
+        // Forget old names behind a watermark (never up to an image left
+        // for later: the watermark must stay below it).
+        let cutoff = (now - Duration::from_secs(FORGET_S)).min(first_left.unwrap_or(now));
         let old: Vec<(PathBuf, SystemTime)> = self
             .seen
             .iter()
@@ -203,5 +228,72 @@ impl FolderTail {
     /// Names remembered (for the memory bound).
     pub fn remembered(&self) -> usize {
         self.seen.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs::File;
+
+    /// `n` images with modification times one second apart, old enough to
+    /// be settled.
+    fn folder(n: usize) -> tempfile::TempDir {
+        let d = tempfile::tempdir().unwrap();
+        let t0 = SystemTime::now() - Duration::from_secs(3600);
+        for i in 0..n {
+            let f = File::create(d.path().join(format!("img-{i:04}.png"))).unwrap();
+            f.set_modified(t0 + Duration::from_secs(i as u64)).unwrap();
+        }
+        d
+    }
+
+    fn names(v: &[PathBuf]) -> Vec<String> {
+        v.iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect()
+    }
+
+    #[test]
+    fn a_full_folder_is_handed_out_in_order_a_room_at_a_time_each_image_once() {
+        let d = folder(50);
+        let mut t = FolderTail::new(d.path());
+        let mut got = Vec::new();
+        let mut scans = 0;
+        loop {
+            // Events name nothing: while behind, the scan lists anyway.
+            let s = t.scan(Some(&[]), 16);
+            assert!(s.images.len() <= 16);
+            got.extend(names(&s.images));
+            scans += 1;
+            if !t.behind {
+                break;
+            }
+            assert!(scans < 10);
+        }
+        let want: Vec<String> = (0..50).map(|i| format!("img-{i:04}.png")).collect();
+        assert_eq!(got, want);
+        assert_eq!(scans, 4);
+        // Nothing new afterwards, and nothing remembered beyond the bound.
+        assert!(t.scan(None, 16).images.is_empty());
+        assert!(t.remembered() <= 50);
+    }
+
+    #[test]
+    fn the_watermark_never_passes_an_image_left_for_later() {
+        // All images older than FORGET_S: each scan forgets what it handed
+        // out behind a watermark, which must stay below those left.
+        let d = folder(10);
+        let mut t = FolderTail::new(d.path());
+        let a = t.scan(None, 3);
+        assert_eq!(
+            names(&a.images),
+            ["img-0000.png", "img-0001.png", "img-0002.png"]
+        );
+        assert!(t.behind);
+        let b = t.scan(None, 100);
+        assert_eq!(b.images.len(), 7, "{:?}", names(&b.images));
+        assert!(!t.behind);
+        assert_eq!(t.remembered(), 0, "all forgotten behind the watermark");
     }
 }

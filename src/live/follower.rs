@@ -80,12 +80,36 @@ impl LogFollow {
 /// must not become one batch of thousands.
 pub const IMAGES_PER_POLL: usize = 64;
 
+/// Most images waiting in the follower's queue: the rest of a backlog
+/// stays on disk, found again by the folder's next scan.
+pub const IMAGES_QUEUED: usize = 4 * IMAGES_PER_POLL;
+
 /// An image waiting to be inspected.
 struct ImageJob {
     item: Item,
     path: Option<PathBuf>,
     bytes: Option<Arc<Vec<u8>>>,
     tries: u8,
+}
+
+impl ImageJob {
+    /// An image file (named explicitly or found in a folder); its cycle
+    /// from its name where the name carries one.
+    fn file(p: PathBuf) -> Self {
+        ImageJob {
+            item: Item {
+                name: p.display().to_string(),
+                source: Source::Path(p.clone()),
+                meta: ItemMeta {
+                    cycle: cycle_of_name(&p),
+                    ..Default::default()
+                },
+            },
+            path: Some(p),
+            bytes: None,
+            tries: 0,
+        }
+    }
 }
 
 /// A followed folder and what it is for.
@@ -182,7 +206,7 @@ impl Follower {
                     .unwrap_or(Path::new("."));
                 if !f.folders.iter().any(|d| d.tail.path == parent) {
                     let mut t = FolderTail::new(parent);
-                    let _ = t.scan(None); // what is there now is not new
+                    let _ = t.scan(None, usize::MAX); // what is there now is not new
                     t.mark_seen(&p);
                     f.folders.push(FolderFollow {
                         tail: t,
@@ -191,19 +215,7 @@ impl Follower {
                 }
             } else {
                 // An image named explicitly.
-                f.queue.push_back(ImageJob {
-                    item: Item {
-                        name: p.display().to_string(),
-                        source: Source::Path(p.clone()),
-                        meta: ItemMeta {
-                            cycle: cycle_of_name(&p),
-                            ..Default::default()
-                        },
-                    },
-                    path: Some(p.clone()),
-                    bytes: None,
-                    tries: 0,
-                });
+                f.queue.push_back(ImageJob::file(p.clone()));
             }
         }
         f
@@ -257,7 +269,9 @@ impl Follower {
     /// poll again at once instead of waiting for the files to change.
     pub fn behind(&self) -> bool {
         // (An image retried because it was caught half-written waits.)
-        self.queue.iter().any(|j| j.tries == 0) || self.logs.iter().any(|l| l.tail.behind())
+        self.queue.iter().any(|j| j.tries == 0)
+            || self.logs.iter().any(|l| l.tail.behind())
+            || self.folders.iter().any(|d| d.tail.behind)
     }
 
     /// Every log followed is finished (or left) and nothing is queued.
@@ -299,8 +313,21 @@ impl Follower {
         }
         // Folders: new images and new logs.
         let mut new_logs = Vec::new();
+        let queued = self.queue.len();
         for d in &mut self.folders {
-            let scan = d.tail.scan(if rescan { None } else { changed });
+            // Images are looked for when the queue is nearly empty (a folder
+            // of thousands is listed once per a few polls, not every one).
+            if d.images && queued > IMAGES_PER_POLL {
+                d.tail.defer();
+                continue;
+            }
+            // (A folder followed for its logs hands out its images unread.)
+            let room = if d.images {
+                IMAGES_QUEUED - queued
+            } else {
+                usize::MAX
+            };
+            let scan = d.tail.scan(if rescan { None } else { changed }, room);
             for f in scan.findings {
                 b.events.push(LiveEvent::Finding(f));
             }
@@ -319,19 +346,7 @@ impl Follower {
             new_logs.extend(scan.logs);
             if d.images {
                 for p in scan.images {
-                    self.queue.push_back(ImageJob {
-                        item: Item {
-                            name: p.display().to_string(),
-                            source: Source::Path(p.clone()),
-                            meta: ItemMeta {
-                                cycle: cycle_of_name(&p),
-                                ..Default::default()
-                            },
-                        },
-                        path: Some(p),
-                        bytes: None,
-                        tries: 0,
-                    });
+                    self.queue.push_back(ImageJob::file(p));
                 }
             }
         }

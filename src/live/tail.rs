@@ -409,28 +409,8 @@ impl McapTail {
                         });
                     }
                 }
-                op::SCHEMA => {
-                    if let Ok(records::Record::Schema { header, data }) =
-                        mcap::parse_record(opcode, body)
-                    {
-                        out.schemas.push(SchemaDef {
-                            id: header.id,
-                            name: header.name,
-                            encoding: header.encoding,
-                            data: data.into_owned(),
-                        });
-                    }
-                }
-                op::CHANNEL => {
-                    if let Ok(records::Record::Channel(c)) = mcap::parse_record(opcode, body) {
-                        out.channels.push(ChannelDef {
-                            id: c.id,
-                            schema_id: c.schema_id,
-                            topic: c.topic,
-                            message_encoding: c.message_encoding,
-                        });
-                    }
-                }
+                op::SCHEMA => out.schemas.extend(SchemaDef::parse(body)),
+                op::CHANNEL => out.channels.extend(ChannelDef::parse(body)),
                 op::DATA_END | op::FOOTER => {
                     flush_run(&mut run, &mut out, &buf);
                     self.pos = start + end as u64;

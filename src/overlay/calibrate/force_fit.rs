@@ -165,6 +165,45 @@ pub(super) fn force_fit(
     (ss, vals, ys.len())
 }
 
+/// The force fit's fixed inputs and its two searches: the calibration's
+/// stages, jackknife and propagation call these instead of spelling the
+/// spans each time.
+#[derive(Clone, Copy)]
+pub(super) struct ForceSearch<'a> {
+    pub knots: &'a [f64],
+    /// F_ins at the knots when it is not fitted.
+    pub fixed: Option<&'a [f64]>,
+    pub p: &'a Params,
+}
+
+impl ForceSearch<'_> {
+    /// Around the nominal standoff: ±2 mm, τ 0–400 µs.
+    pub fn wide(&self, cycles: &[&ForceCycle], nominal_so: f64) -> (f64, f64, Vec<f64>) {
+        fit_force(
+            cycles,
+            self.knots,
+            self.fixed,
+            self.p,
+            (nominal_so, 200e-6),
+            (2.0, 200e-6),
+            FORCE_ITERS_WIDE,
+        )
+    }
+
+    /// Around a fit (standoff, τ): ±0.3 mm, ±60 µs.
+    pub fn narrow(&self, cycles: &[&ForceCycle], around: (f64, f64)) -> (f64, f64, Vec<f64>) {
+        fit_force(
+            cycles,
+            self.knots,
+            self.fixed,
+            self.p,
+            around,
+            (0.3, 60e-6),
+            FORCE_ITERS_NARROW,
+        )
+    }
+}
+
 /// Standoff and τ minimising the force objective (nested golden sections).
 pub(super) fn fit_force(
     cycles: &[&ForceCycle],

@@ -245,6 +245,11 @@ pub fn calibrate(
     } else {
         Some(nominal_vals.as_slice())
     };
+    let search = ForceSearch {
+        knots: &knots,
+        fixed,
+        p: base,
+    };
     // Coarse grid → c0; then long ensembles on a fine grid around c0 (the
     // coarse ensembles are short: their sampling noise moves the minimum by
     // several per cent from one realisation to the next), again around the
@@ -326,15 +331,7 @@ pub fn calibrate(
         let (c1, dz1, psi1) = stage.5;
         let fc = make_fcycles(dz1, psi1);
         let refs: Vec<&ForceCycle> = fc.iter().collect();
-        let (so, _, vals) = fit_force(
-            &refs,
-            &knots,
-            fixed,
-            base,
-            (nominal_so, 200e-6),
-            (2.0, 200e-6),
-            FORCE_ITERS_WIDE,
-        );
+        let (so, _, vals) = search.wide(&refs, nominal_so);
         // A first-stage force fit that jumps by more than 1 mm from the
         // nominal standoff is taken as failed (seen once in 78 sweep logs:
         // 12.77 mm against a true 14.09, the final fit then found the truth):
@@ -487,15 +484,7 @@ pub fn calibrate(
         notes.push("no force channel: standoff and F_ins cannot be identified; the nominal values are kept".into());
     } else {
         let all: Vec<&ForceCycle> = fcycles.iter().collect();
-        let (so, tau, vals) = fit_force(
-            &all,
-            &knots,
-            fixed,
-            base,
-            (nominal_so, 200e-6),
-            (2.0, 200e-6),
-            FORCE_ITERS_WIDE,
-        );
+        let (so, tau, vals) = search.wide(&all, nominal_so);
         let nb_f = nb.min(all.len());
         let jk: Vec<(f64, f64, Vec<f64>)> = (0..nb_f)
             .into_par_iter()
@@ -506,15 +495,7 @@ pub fn calibrate(
                     .filter(|(i, _)| i * nb_f / all.len() != b)
                     .map(|(_, c)| *c)
                     .collect();
-                fit_force(
-                    &sub,
-                    &knots,
-                    fixed,
-                    base,
-                    (so, tau),
-                    (0.3, 60e-6),
-                    FORCE_ITERS_NARROW,
-                )
+                search.narrow(&sub, (so, tau))
             })
             .collect();
         progress.inc(1);
@@ -531,15 +512,7 @@ pub fn calibrate(
                 }
                 let fc = make_fcycles(d, ps);
                 let refs: Vec<&ForceCycle> = fc.iter().collect();
-                let (so2, tau2, _) = fit_force(
-                    &refs,
-                    &knots,
-                    fixed,
-                    base,
-                    (so, tau),
-                    (0.3, 60e-6),
-                    FORCE_ITERS_NARROW,
-                );
+                let (so2, tau2, _) = search.narrow(&refs, (so, tau));
                 (so2 - so, tau2 - tau)
             })
             .collect();

@@ -201,6 +201,41 @@ struct State {
     read: ReadCounts,
 }
 
+/// Adds the schema and channel definitions not known yet to `known_*`
+/// (the first definition of an id is used; schema id 0 means "no
+/// schema"). Returns whether any was new, and the channels defined again
+/// differently (the new definition with the topic the id had before), for
+/// the loader's findings; the live decoder reads them the same way.
+pub(crate) fn merge_defs(
+    known_schemas: &mut BTreeMap<u16, SchemaDef>,
+    known_channels: &mut BTreeMap<u16, ChannelDef>,
+    schemas: Vec<SchemaDef>,
+    channels: Vec<ChannelDef>,
+) -> (bool, Vec<(ChannelDef, String)>) {
+    let mut changed = false;
+    let mut conflicts = Vec::new();
+    for s in schemas {
+        if s.id != 0 && !known_schemas.contains_key(&s.id) {
+            known_schemas.insert(s.id, s);
+            changed = true;
+        }
+    }
+    for c in channels {
+        match known_channels.get(&c.id) {
+            None => {
+                known_channels.insert(c.id, c);
+                changed = true;
+            }
+            Some(old) if *old != c => {
+                let topic = old.topic.clone();
+                conflicts.push((c, topic));
+            }
+            Some(_) => {}
+        }
+    }
+    (changed, conflicts)
+}
+
 impl State {
     fn add_defs(
         &mut self,
@@ -210,29 +245,20 @@ impl State {
         full: bool,
         file: &str,
     ) {
-        let mut changed = false;
-        for s in schemas {
-            if s.id != 0 && !self.schemas.contains_key(&s.id) {
-                self.schemas.insert(s.id, s);
-                changed = true;
-            }
-        }
-        for c in channels {
-            match self.channels.get(&c.id) {
-                None => {
-                    self.channels.insert(c.id, c);
-                    changed = true;
-                }
-                Some(old) if *old != c => self.findings.push(Finding::new(
-                    Severity::Warning,
-                    FindingCode::ChannelConflict,
-                    file,
-                    Some(&c.topic),
-                    None,
-                    format!("channel id {} redefined inside a chunk ('{}' before); the first definition is used", c.id, old.topic),
-                )),
-                Some(_) => {}
-            }
+        let (changed, conflicts) =
+            merge_defs(&mut self.schemas, &mut self.channels, schemas, channels);
+        for (c, old_topic) in conflicts {
+            self.findings.push(Finding::new(
+                Severity::Warning,
+                FindingCode::ChannelConflict,
+                file,
+                Some(&c.topic),
+                None,
+                format!(
+                    "channel id {} redefined inside a chunk ('{old_topic}' before); the first definition is used",
+                    c.id
+                ),
+            ));
         }
         if changed {
             self.plans = Arc::new(build_plans(&self.channels, &self.schemas, map, full));

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::rig::report::{FindingCode, Severity};
-use mcap::records::{self, op};
+use mcap::records::op;
 use rayon::prelude::*;
 use std::io::Read;
 
@@ -73,25 +73,13 @@ pub(super) fn visit_records<V: RecordVisitor>(
                 }
             }
             op::SCHEMA => {
-                if let Ok(records::Record::Schema { header, data }) =
-                    mcap::parse_record(opcode, body)
-                {
-                    v.schema(SchemaDef {
-                        id: header.id,
-                        name: header.name,
-                        encoding: header.encoding,
-                        data: data.into_owned(),
-                    });
+                if let Some(s) = SchemaDef::parse(body) {
+                    v.schema(s);
                 }
             }
             op::CHANNEL => {
-                if let Ok(records::Record::Channel(c)) = mcap::parse_record(opcode, body) {
-                    v.channel(ChannelDef {
-                        id: c.id,
-                        schema_id: c.schema_id,
-                        topic: c.topic,
-                        message_encoding: c.message_encoding,
-                    });
+                if let Some(c) = ChannelDef::parse(body) {
+                    v.channel(c);
                 }
             }
             _ => {}

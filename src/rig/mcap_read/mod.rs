@@ -165,6 +165,38 @@ pub struct ChannelDef {
     pub message_encoding: String,
 }
 
+impl SchemaDef {
+    /// The schema record of a record body (None: not one, or damaged),
+    /// parsed by the mcap crate; the scan, the item reader and the live
+    /// tail take their schemas from here.
+    pub fn parse(body: &[u8]) -> Option<Self> {
+        match mcap::parse_record(mcap::records::op::SCHEMA, body).ok()? {
+            mcap::records::Record::Schema { header, data } => Some(SchemaDef {
+                id: header.id,
+                name: header.name,
+                encoding: header.encoding,
+                data: data.into_owned(),
+            }),
+            _ => None,
+        }
+    }
+}
+
+impl ChannelDef {
+    /// The channel record of a record body (None: not one, or damaged).
+    pub fn parse(body: &[u8]) -> Option<Self> {
+        match mcap::parse_record(mcap::records::op::CHANNEL, body).ok()? {
+            mcap::records::Record::Channel(c) => Some(ChannelDef {
+                id: c.id,
+                schema_id: c.schema_id,
+                topic: c.topic,
+                message_encoding: c.message_encoding,
+            }),
+            _ => None,
+        }
+    }
+}
+
 /// A metadata record.
 #[derive(Debug, Clone)]
 pub struct MetadataRecord {

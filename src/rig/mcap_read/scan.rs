@@ -137,29 +137,13 @@ impl<'a> Walker<'a> {
                 }
                 _ => self.corrupt_small(opcode, pos),
             },
-            op::SCHEMA => match mcap::parse_record(opcode, body) {
-                Ok(records::Record::Schema { header, data }) => self.add_schema(
-                    SchemaDef {
-                        id: header.id,
-                        name: header.name,
-                        encoding: header.encoding,
-                        data: data.into_owned(),
-                    },
-                    pos,
-                ),
-                _ => self.corrupt_small(opcode, pos),
+            op::SCHEMA => match SchemaDef::parse(body) {
+                Some(s) => self.add_schema(s, pos),
+                None => self.corrupt_small(opcode, pos),
             },
-            op::CHANNEL => match mcap::parse_record(opcode, body) {
-                Ok(records::Record::Channel(c)) => self.add_channel(
-                    ChannelDef {
-                        id: c.id,
-                        schema_id: c.schema_id,
-                        topic: c.topic,
-                        message_encoding: c.message_encoding,
-                    },
-                    pos,
-                ),
-                _ => self.corrupt_small(opcode, pos),
+            op::CHANNEL => match ChannelDef::parse(body) {
+                Some(c) => self.add_channel(c, pos),
+                None => self.corrupt_small(opcode, pos),
             },
             op::MESSAGE_INDEX => self.scan.info.message_indexes = true,
             op::ATTACHMENT if !in_summary => match mcap::parse_record(opcode, body) {
