@@ -26,9 +26,8 @@ use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The rig log (MCAP); several logs or folders of them run one after the other.
-    #[arg(value_name = "LOG.mcap", required = true)]
-    pub logs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub input: super::common::LogBatchArgs,
     /// Nominal parameters (default: preset paper + the log's `rig` metadata).
     #[command(flatten)]
     pub params: ParamArgs,
@@ -57,18 +56,11 @@ pub struct Args {
     /// level); the parameter file then says driver = "motor".
     #[arg(long)]
     pub flywheel: bool,
-    /// Run only shard K of N (K from 0) of the sorted logs; default from the
-    /// cluster's environment (docs/scale.md).
-    #[arg(long, value_name = "K/N")]
-    pub shard: Option<String>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let shard =
-        crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
-    if let ([log], true) = (args.logs.as_slice(), shard.is_whole())
-        && !log.is_dir()
-    {
+    let (shard, single) = args.input.resolve()?;
+    if let Some(log) = single {
         let report = calibrate_one(&args, log)?;
         if let Some(path) = &args.out {
             crate::output::write_file(path, report.params_toml.as_bytes())?;
@@ -83,7 +75,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         return Ok(ExitCode::SUCCESS);
     }
-    super::common::run_log_batch(shard, &args.logs, args.json, |l| {
+    super::common::run_log_batch(shard, &args.input.logs, args.json, |l| {
         let report = calibrate_one(&args, &l.path)?;
         if let Some(dir) = &args.out {
             let mut out = crate::output::Report::new_in(&dir.join(&l.name))?;

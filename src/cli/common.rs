@@ -383,6 +383,35 @@ impl SolverArgs {
     }
 }
 
+/// The logs `calibrate` and `overlay` run, and which shard of them.
+#[derive(Debug, clap::Args)]
+pub struct LogBatchArgs {
+    /// The rig log (MCAP); several logs or folders of them run one after the other.
+    #[arg(value_name = "LOG.mcap", required = true)]
+    pub logs: Vec<PathBuf>,
+    /// Run only shard K of N (K from 0) of the sorted logs; default from the
+    /// cluster's environment (docs/scale.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+}
+
+impl LogBatchArgs {
+    /// The shard (given or from the cluster's environment) and, when the
+    /// whole run is one log file, that log (its report printed as is, not
+    /// as a batch of one).
+    pub fn resolve(
+        &self,
+    ) -> anyhow::Result<(crate::plant::shard::Shard, Option<&std::path::Path>)> {
+        let shard = crate::plant::shard::Shard::resolve(self.shard.as_deref())
+            .map_err(anyhow::Error::msg)?;
+        let single = match self.logs.as_slice() {
+            [log] if shard.is_whole() && !log.is_dir() => Some(log.as_path()),
+            _ => None,
+        };
+        Ok((shard, single))
+    }
+}
+
 /// The logs of one shard (`calibrate` and `overlay` over several logs),
 /// each run by `one`, which returns its report and the text to print: a
 /// missing log or a failed run is listed as an error and the others go on.

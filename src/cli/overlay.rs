@@ -31,9 +31,8 @@ use std::process::ExitCode;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The rig log (MCAP); several logs or folders of them run one after the other.
-    #[arg(value_name = "LOG.mcap", required = true)]
-    pub logs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub input: super::common::LogBatchArgs,
     #[command(flatten)]
     pub params: ParamArgs,
     /// Fidelity level of the prediction: clearance (default: the ensemble), ideal, kinematic, or auto.
@@ -77,10 +76,6 @@ pub struct Args {
     /// Crank-angle grid points per revolution.
     #[arg(long, default_value_t = 720, value_parser = super::common::bounds::points)]
     pub points: usize,
-    /// Run only shard K of N (K from 0) of the sorted logs; default from the
-    /// cluster's environment (docs/scale.md).
-    #[arg(long, value_name = "K/N")]
-    pub shard: Option<String>,
 }
 
 /// Parses `A..B`, `A..`, `..B` (cycle indices, B exclusive).
@@ -134,11 +129,8 @@ pub fn load_and_cycles(
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let shard =
-        crate::plant::shard::Shard::resolve(args.shard.as_deref()).map_err(anyhow::Error::msg)?;
-    if let ([log], true) = (args.logs.as_slice(), shard.is_whole())
-        && !log.is_dir()
-    {
+    let (shard, single) = args.input.resolve()?;
+    if let Some(log) = single {
         let report = overlay_one(&args, log, args.out.as_deref(), args.mcap.as_deref())?;
         if args.json {
             outln!("{}", serde_json::to_string_pretty(&report)?)?;
@@ -150,7 +142,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.mcap.is_some() {
         bail!("--mcap takes one log (one file per log): run the logs one at a time");
     }
-    super::common::run_log_batch(shard, &args.logs, args.json, |l| {
+    super::common::run_log_batch(shard, &args.input.logs, args.json, |l| {
         let dir = args.out.as_ref().map(|d| d.join(&l.name));
         let report = overlay_one(&args, &l.path, dir.as_deref(), None)?;
         let text = summary_text(&report, dir.as_deref());

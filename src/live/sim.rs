@@ -309,6 +309,28 @@ struct Out {
     seq: Vec<u32>,
 }
 
+impl Out {
+    /// Writes one message on the `c`-th channel, numbered in sequence.
+    fn message(
+        &mut self,
+        c: usize,
+        log_time: u64,
+        publish_time: u64,
+        data: &[u8],
+    ) -> Result<(), mcap::McapError> {
+        self.seq[c] += 1;
+        self.w.write_to_known_channel(
+            &MessageHeader {
+                channel_id: self.ids[c],
+                sequence: self.seq[c],
+                log_time,
+                publish_time,
+            },
+            data,
+        )
+    }
+}
+
 fn file_name(out: &Path, part: Option<usize>) -> PathBuf {
     match part {
         None => out.to_path_buf(),
@@ -565,16 +587,7 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
                     "format": "png",
                     "data": data,
                 });
-                out.seq[cam] += 1;
-                if let Err(e) = out.w.write_to_known_channel(
-                    &MessageHeader {
-                        channel_id: out.ids[cam],
-                        sequence: out.seq[cam],
-                        log_time: img_lt,
-                        publish_time: img_lt,
-                    },
-                    msg.to_string().as_bytes(),
-                ) {
+                if let Err(e) = out.message(cam, img_lt, img_lt, msg.to_string().as_bytes()) {
                     error = Some(e.to_string());
                 }
             }
@@ -629,17 +642,8 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
         } else {
             newest_sample = Some(newest_sample.map_or(lt, |n| n.max(lt)));
         }
-        out.seq[c] += 1;
         report.messages += 1;
-        if let Err(e) = out.w.write_to_known_channel(
-            &MessageHeader {
-                channel_id: out.ids[c],
-                sequence: out.seq[c],
-                log_time: lt,
-                publish_time: pt,
-            },
-            d,
-        ) {
+        if let Err(e) = out.message(c, lt, pt, d) {
             error = Some(e.to_string());
         }
     });
