@@ -16,7 +16,7 @@
 
 use crate::rig::report::{Finding, FindingCode, Severity};
 use crate::vision::batch::IMAGE_EXTENSIONS;
-use std::collections::HashMap;
+use std::collections::{BinaryHeap, HashMap};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime};
 
@@ -74,18 +74,25 @@ impl FolderTail {
         }
     }
 
-    fn walk(dir: &Path, out: &mut Vec<(PathBuf, SystemTime)>, depth: usize) -> std::io::Result<()> {
+    /// Every log and image file below `dir` (8 levels at most), given to
+    /// `keep` one by one (nothing is collected here: a whole listing of a
+    /// folder of waiting images must not cost a vector of all of them).
+    fn walk(
+        dir: &Path,
+        keep: &mut dyn FnMut(PathBuf, SystemTime),
+        depth: usize,
+    ) -> std::io::Result<()> {
         for e in std::fs::read_dir(dir)?.flatten() {
             let p = e.path();
             let Ok(md) = e.metadata() else { continue };
             if md.is_dir() {
                 if depth < 8 {
-                    let _ = Self::walk(&p, out, depth + 1);
+                    let _ = Self::walk(&p, keep, depth + 1);
                 }
             } else if md.is_file() {
                 let x = ext(&p);
                 if x == "mcap" || IMAGE_EXTENSIONS.contains(&x.as_str()) {
-                    out.push((p, md.modified().unwrap_or(SystemTime::UNIX_EPOCH)));
+                    keep(p, md.modified().unwrap_or(SystemTime::UNIX_EPOCH));
                 }
             }
         }
@@ -104,6 +111,8 @@ impl FolderTail {
     pub fn scan(&mut self, changed: Option<&[PathBuf]>, room: usize) -> FolderScan {
         let mut out = FolderScan::default();
         let mut files = Vec::new();
+        // The oldest image a whole listing left out (past the room).
+        let mut dropped: Option<SystemTime> = None;
         let listed = match changed {
             Some(paths) if !self.first && !self.missing && !self.behind => {
                 for p in paths.iter().filter(|p| p.starts_with(&self.path)) {
@@ -119,7 +128,32 @@ impl FolderTail {
                 }
                 Ok(())
             }
-            _ => Self::walk(&self.path, &mut files, 0),
+            _ => {
+                // Every log, and of the images not seen yet only the
+                // `room + 1` oldest (a bounded heap; the one past the room
+                // tells the scan that images are left).
+                let (watermark, seen) = (self.watermark, &self.seen);
+                let keep_n = room.saturating_add(1);
+                let mut oldest: BinaryHeap<(SystemTime, PathBuf)> = BinaryHeap::new();
+                let r = Self::walk(
+                    &self.path,
+                    &mut |p, m| {
+                        if ext(&p) == "mcap" {
+                            files.push((p, m));
+                        } else if !(watermark.is_some_and(|w| m <= w) || seen.get(&p) == Some(&m)) {
+                            oldest.push((m, p));
+                            if oldest.len() > keep_n
+                                && let Some((m, _)) = oldest.pop()
+                            {
+                                dropped = Some(dropped.map_or(m, |d: SystemTime| d.min(m)));
+                            }
+                        }
+                    },
+                    0,
+                );
+                files.extend(oldest.into_iter().map(|(m, p)| (p, m)));
+                r
+            }
         };
         let gone = !self.path.is_dir();
         if gone && !self.ever {
@@ -200,6 +234,7 @@ impl FolderTail {
             out.logs.push(l);
         }
         self.first = false;
+        let first_left = first_left.or(dropped);
         self.behind = first_left.is_some();
         // Forget old names behind a watermark (never up to an image left
         // for later: the watermark must stay below it).
