@@ -251,11 +251,14 @@ impl ClearanceModel {
         let vb = [va[0] - l * omega3 * s3, va[1] + l * omega3 * c3];
         // Eccentricity of the journal P = (x4, offset).
         let ecc = [x4 - b[0], offset - b[1]];
-        let e = norm2(ecc[0], ecc[1]);
+        let e2 = ecc[0] * ecc[0] + ecc[1] * ecc[1];
+        let e = e2.sqrt();
         let delta = e - self.clearance;
         let dv = [v4 - vb[0], -vb[1]];
         let (n, delta_dot) = if e > 0.0 {
-            let inv_e = 1.0 / e;
+            // 1/e as e · (1/e²): the division runs beside the square root
+            // instead of after it (the normal and δ̇ are on the critical path).
+            let inv_e = e * (1.0 / e2);
             let n = [ecc[0] * inv_e, ecc[1] * inv_e];
             (n, dv[0] * n[0] + dv[1] * n[1])
         } else {

@@ -45,8 +45,10 @@ impl ContactLaw {
         if delta <= 0.0 {
             return 0.0;
         }
-        let v_minus = approach.max(self.approach_floor);
-        let f = self.k * delta * delta.sqrt() * (1.0 + self.d * delta_dot / v_minus);
+        // D/δ̇⁻ does not wait for δ̇ (the division is off the right-hand
+        // side's critical path).
+        let damping = self.d / approach.max(self.approach_floor);
+        let f = self.k * delta * delta.sqrt() * (1.0 + damping * delta_dot);
         f.max(0.0)
     }
 

@@ -97,7 +97,7 @@ impl Geometry {
 
         let omega3 = -r * c2 * omega2 * inv_lc3;
         let alpha3 =
-            (r * s2 * omega2 * omega2 - r * c2 * alpha2 + l * s3 * omega3 * omega3) / (l * c3);
+            (r * s2 * omega2 * omega2 - r * c2 * alpha2 + l * s3 * omega3 * omega3) * inv_lc3;
         let x4 = r * c2 + l * c3;
         let v4 = -r * s2 * omega2 - l * s3 * omega3;
         let a4 = -r * c2 * omega2 * omega2

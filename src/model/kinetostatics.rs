@@ -182,11 +182,13 @@ impl Kinetostatics {
         // μ' = μ_g c_d(|v4|) sign(v4). With w = N:
         //   c3 w + s3 μ' |w| = r1 / l + s3 Q − c3 m4 g_y
         let mu = self.mu_g * smoothing(pose.v4.abs(), self.v0, self.v1) * pose.v4.signum();
-        let rhs = r1 / l + s3 * q - c3 * m4 * g[1];
+        // The reciprocals do not wait for r1 (off the critical path).
+        let inv_pos = 1.0 / (c3 + s3 * mu);
+        let rhs = r1 * (1.0 / l) + s3 * q - c3 * m4 * g[1];
         let w = if mu == 0.0 {
             rhs / c3
         } else {
-            let w_pos = rhs / (c3 + s3 * mu);
+            let w_pos = rhs * inv_pos;
             if w_pos >= 0.0 {
                 w_pos
             } else {

@@ -252,7 +252,12 @@ pub(crate) fn run_model<M: JointModel<N>, const N: usize>(
         {
             return Err(r.stall(t0, t1, theta_start));
         }
-        let pen1 = r.model.penetration(t1, &y1);
+        // δ and δ̇ at the step's end: the step's last evaluation computed
+        // them (the same δ; δ̇ to rounding), else the cheap evaluation.
+        let pen1 = match r.model.cached_end(r.model.mode(), t1, &y1) {
+            Some(o) => (o.delta, o.delta_dot),
+            None => r.model.penetration(t1, &y1),
+        };
         let (d0, dd0) = pen;
         let (d1, dd1) = pen1;
         if !(d1 < r.model.rb()) {
