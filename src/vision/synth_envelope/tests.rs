@@ -110,3 +110,56 @@ fn rendered_truth_agrees_with_the_image() {
     }
     assert_eq!(checked, 4);
 }
+
+#[test]
+fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
+    // Heavy defocus, no noise: every intact tip stands 0.8 × position_mm
+    // off its hole's centre, in a random direction. The housing's blurred
+    // light beside the near side of the hole used to pull the measured
+    // centre outward by 0.2–0.4 px (ok pins called bent); the model of the
+    // tip in its hole (`blur_tip`) measures it where it is.
+    use crate::vision::{InspectOptions, inspect_gray};
+    let mut checked = 0;
+    let mut worst: f64 = 0.0;
+    for seed in 0..60 {
+        let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Top));
+        if c.factors.tip_px < 7.0 {
+            continue;
+        }
+        c.factors.noise_dn = 0.0;
+        c.factors.blur_px = 2.2;
+        c.factors.jpeg_quality = None;
+        c.recipe.mm_per_px = Some(c.factors.mm_per_px);
+        c.extras.clear();
+        let tol = c.recipe.tolerance.position_mm;
+        for (i, p) in c.pins.iter_mut().enumerate() {
+            p.damage = Damage::None;
+            p.present = true;
+            let a = 2.399 * (i as f64 + seed as f64);
+            p.offset_mm = (0.8 * tol * a.cos(), 0.8 * tol * a.sin());
+        }
+        let r = c.render().unwrap();
+        let ins = inspect_gray(
+            &c.recipe,
+            &r.gray,
+            r.info.clone(),
+            &InspectOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let cmp = r.compare(&c.factors, &ins);
+        assert!(
+            cmp.status_mismatches.is_empty(),
+            "seed {seed}: {:?}",
+            cmp.status_mismatches
+        );
+        for e in Rendered::ok_centre_errors(&cmp) {
+            worst = worst.max(e);
+        }
+        checked += 1;
+        if checked == 6 {
+            break;
+        }
+    }
+    assert_eq!(checked, 6);
+    assert!(worst < 0.25, "worst ok-pin centre error {worst:.3} px");
+}
