@@ -195,6 +195,17 @@ pub fn inspect_top<P: Px>(
     };
     let lat = match lattice(pitch_px) {
         Ok(l) => l,
+        // An estimated scale is a prior from the image, not a fact: when
+        // the tip-sized blobs form a lattice at another spacing, that
+        // lattice is the evidence (the fit then takes the scale from it).
+        Err(LatticeError::PitchMismatch { .. })
+            if recipe.mm_per_px.is_none() && lattice(None).is_ok() =>
+        {
+            lattice(None).map_err(|_| VisionError::NoPins {
+                part: part.clone(),
+                msg: "cannot estimate the pitch".into(),
+            })?
+        }
         Err(LatticeError::NoPoints) => {
             return Err(VisionError::NoPins {
                 part,
