@@ -163,3 +163,38 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
     assert_eq!(checked, 6);
     assert!(worst < 0.25, "worst ok-pin centre error {worst:.3} px");
 }
+
+#[test]
+fn a_side_view_with_every_pin_missing_is_a_failed_connector() {
+    use crate::vision::{InspectOptions, inspect_gray};
+    let mut checked = 0;
+    for seed in 0..40 {
+        let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Side));
+        if c.recipe.cols > 3 {
+            continue;
+        }
+        for p in &mut c.pins {
+            p.present = false;
+        }
+        c.extras.clear();
+        let r = c.render().unwrap();
+        let ins = inspect_gray(
+            &c.recipe,
+            &r.gray,
+            r.info.clone(),
+            &InspectOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        assert_eq!(ins.verdict, Verdict::Fail, "seed {seed}");
+        assert!(
+            ins.pins.iter().all(|p| p.status == PinStatus::Missing),
+            "seed {seed}"
+        );
+        assert_eq!(ins.pins.len(), c.pins.len());
+        checked += 1;
+        if checked == 3 {
+            break;
+        }
+    }
+    assert_eq!(checked, 3);
+}
