@@ -120,7 +120,7 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
     // tip in its hole (`blur_tip`) measures it where it is.
     use crate::vision::{InspectOptions, inspect_gray};
     let mut checked = 0;
-    let mut worst: f64 = 0.0;
+    let (mut worst, mut worst_band): (f64, f64) = (0.0, 0.0);
     for seed in 0..60 {
         let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Top));
         if c.factors.tip_px < 7.0 {
@@ -152,8 +152,12 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
             "seed {seed}: {:?}",
             cmp.status_mismatches
         );
+        // The guard band between an ok pin (≤ 0.85 × position_mm) and
+        // the limit, in px: a centre error inside it cannot flip a status.
+        let band_px = 0.15 * tol / c.factors.mm_per_px;
         for e in Rendered::ok_centre_errors(&cmp) {
             worst = worst.max(e);
+            worst_band = worst_band.max(e / band_px);
         }
         checked += 1;
         if checked == 6 {
@@ -161,7 +165,13 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
         }
     }
     assert_eq!(checked, 6);
-    assert!(worst < 0.25, "worst ok-pin centre error {worst:.3} px");
+    eprintln!(
+        "blurred off-centre tips: worst ok-pin centre error {worst:.3} px, {worst_band:.2} of the guard band"
+    );
+    assert!(
+        worst_band < 1.0,
+        "worst ok-pin centre error {worst:.3} px = {worst_band:.2} × the guard band"
+    );
 }
 
 #[test]
