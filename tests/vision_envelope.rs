@@ -11,7 +11,8 @@
 //! 200 133 newly an error, see docs/vision.md; after the component-tree split
 //! of tip blobs, the side view's bar rule and the generator's gradient
 //! levelled off beyond the part, 2026-11-26: 93.75 %, 99.11 %, 1 error,
-//! 0.081 px), not issue 12's targets (≥ 99.5 % verdicts,
+//! 0.081 px; after the model-fitted centres of blurred tips, 2026-11-26:
+//! 95.4 %, 99.30 %, 1 error, 0.069 px), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -92,12 +93,12 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 93.3,
+        pct(right, n) >= 95.0,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );
     assert!(
-        pct(pins - pins_wrong, pins) >= 99.0,
+        pct(pins - pins_wrong, pins) >= 99.2,
         "pin statuses right: {:.2} %",
         pct(pins - pins_wrong, pins)
     );
@@ -105,5 +106,5 @@ fn verdicts_hold_over_the_randomised_envelope() {
         errors <= 1,
         "{errors} images inside the envelope ended as errors"
     );
-    assert!(median <= 0.085, "ok-pin centre error median {median:.3} px");
+    assert!(median <= 0.075, "ok-pin centre error median {median:.3} px");
 }

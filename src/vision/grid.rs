@@ -154,6 +154,40 @@ pub fn estimate_lattice(
             }
         }
     }
+    // No two points one pitch apart (pins missing between the ones found):
+    // with a known pitch, pairs at a whole number of pitches give the
+    // rotation, provided such a pair is some point's nearest neighbour —
+    // a part of another pitch has its nearest neighbours at its own pitch.
+    if angles.is_empty() && pitch_px.is_some() {
+        let whole = |d: f64, p: f64| {
+            let k = (d / p).round();
+            (k >= 2.0 && (d - k * p).abs() < 0.1 * p).then_some(k)
+        };
+        let mut near = nearest(true);
+        near.extend(nearest(false));
+        let nearest_whole = near
+            .iter()
+            .any(|&d| whole(d, px).is_some() || whole(d, py).is_some());
+        if nearest_whole {
+            for i in 0..n {
+                for j in (i + 1)..n {
+                    let (dx, dy) = (pts[j].0 - pts[i].0, pts[j].1 - pts[i].1);
+                    let d = (dx * dx + dy * dy).sqrt();
+                    let ang = wrap_angle(dy.atan2(dx));
+                    if cols > 1 && whole(d, px).is_some() && ang.abs() < tilt {
+                        angles.push(ang);
+                    }
+                    if rows > 1 && whole(d, py).is_some() && (PI / 2.0 - ang.abs()) < tilt {
+                        angles.push(if ang > 0.0 {
+                            ang - PI / 2.0
+                        } else {
+                            ang + PI / 2.0
+                        });
+                    }
+                }
+            }
+        }
+    }
     if angles.is_empty() && n >= 3 && pitch_px.is_some() {
         let mut d = nearest(true);
         d.extend(nearest(false));
@@ -361,6 +395,27 @@ mod tests {
         assert!(
             matches!(e, LatticeError::PitchMismatch { found_px, .. } if (found_px - 84.7).abs() < 1.0)
         );
+    }
+
+    #[test]
+    fn known_pitch_with_the_pins_between_missing() {
+        // A 1 × 4 part with its middle pins missing and a piece of debris
+        // 2.5 pitches from the first pin (seed 500 279 of the envelope):
+        // the pins three pitches apart give the rotation, not an error.
+        let theta = 1.4f64.to_radians();
+        let (s, c) = theta.sin_cos();
+        let at = |a: f64, b: f64| {
+            (
+                100.0 + 82.3 * (a * c - b * s),
+                200.0 + 82.3 * (a * s + b * c),
+            )
+        };
+        let p = vec![at(0.0, 0.0), at(3.0, 0.0), at(2.45, 0.5)];
+        let lat = estimate_lattice(&p, Some((82.3, 82.3)), 1.0, 1, 4).unwrap();
+        assert!((lat.theta - theta).abs() < 1e-9, "{}", lat.theta);
+        // Nearest neighbours at 1.69 pitches: another part, still an error.
+        let q = vec![at(0.0, 0.0), at(1.69, 0.0), at(3.38, 0.0)];
+        assert!(estimate_lattice(&q, Some((82.3, 82.3)), 1.0, 1, 4).is_err());
     }
 
     #[test]

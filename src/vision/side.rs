@@ -328,135 +328,187 @@ pub fn inspect_side<P: Px>(
             height_px: line.height_above(tip.0, tip.1),
         });
     }
-    if bars.is_empty() {
-        return Err(VisionError::NoPins {
-            part,
-            msg: "no pin standing on the housing".into(),
-        });
-    }
-
-    // 5. Along-row placement: 1-D lattice, housing anchor, robust fit.
-    let pitch_mm = recipe.pitch_mm[0];
-    let fixed_s = recipe.mm_per_px.map(|m| 1.0 / m);
-    // Spacings along the row between neighbouring bars (a missing pin
-    // leaves a double spacing, so neither a median nor the smallest spacing
-    // is the pitch on its own).
-    let spacings: Vec<f64> = {
-        let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
-        u.sort_by(|a, b| a.total_cmp(b));
-        u.windows(2).map(|w| w[1] - w[0]).collect()
-    };
-    let pitch_px = match fixed_s {
-        Some(s) => pitch_mm * s,
-        None => {
-            // The pins' own width is a second ruler (pin_mm is known): it
-            // sets the scale of the spacings, which then refine it.
-            let mut w: Vec<f64> = bars.iter().map(|b| b.width_px).collect();
-            let width_px = grid::median(&mut w).unwrap_or(f64::NAN);
-            let prior = pitch_mm * width_px / recipe.pin_mm;
-            let mut d = spacings.clone();
-            match refine_pitch(&spacings, prior).or_else(|| grid::median(&mut d)) {
-                Some(p) => p,
-                None if prior.is_finite() && prior > 0.0 => {
-                    warnings.push(format!(
-                        "one pin only: mm_per_px taken from its width ({:.5}), not from the pitch",
-                        recipe.pin_mm / width_px
-                    ));
-                    prior
-                }
-                None => {
-                    return Err(VisionError::NoPins {
-                        part: part.clone(),
-                        msg: "cannot estimate mm_per_px: no pin width measured".into(),
-                    });
-                }
-            }
-        }
-    };
-    // Reject the wrong part: bars off the recipe's lattice, judged on the
-    // row as a whole (a pin bent towards its neighbour changes two
-    // spacings, not the lattice).
-    let u_bars: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
-    let ok_off_px = fixed_s.map_or(0.0, |s| recipe.tolerance.position_mm * s);
-    if fixed_s.is_some() && !row_fits_lattice(&u_bars, pitch_px, ok_off_px.max(0.15 * pitch_px)) {
-        let mut d = spacings.clone();
-        let md = grid::median(&mut d).unwrap_or(f64::NAN);
-        return Err(VisionError::WrongPart {
-            part,
-            msg: format!(
-                "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
-                recipe.mm_per_px.unwrap_or(f64::NAN)
-            ),
-        });
-    }
-    let u_ref = bars[0].u_px;
-    let (mut cph, mut sph) = (0.0, 0.0);
-    for b in &bars {
-        let a = (b.u_px - u_ref) / pitch_px;
-        cph += (2.0 * std::f64::consts::PI * a).cos();
-        sph += (2.0 * std::f64::consts::PI * a).sin();
-    }
-    let phase = sph.atan2(cph) / (2.0 * std::f64::consts::PI);
-    let lat_a = |u: f64| (u - u_ref) / pitch_px - phase;
-    let idx: Vec<Option<i64>> = bars
-        .iter()
-        .map(|b| {
-            let a = lat_a(b.u_px);
-            ((a - a.round()).abs() < 0.3).then_some(a.round() as i64)
-        })
-        .collect();
-    let members: Vec<(i64, i64)> = idx.iter().flatten().map(|&a| (a, 0)).collect();
     // Housing block ends along the row (coarse extent refined to the line).
     let (hx0, hx1) = (hx0_c as f64 * kf, (hx1_c as f64 + 1.0) * kf - 1.0);
     let u_h0 = cs * hx0 + sn * line.y_at(hx0);
     let u_h1 = cs * hx1 + sn * line.y_at(hx1);
-    let anchor = Some((lat_a(0.5 * (u_h0 + u_h1)), 0.0));
-    let skipped = |r: u32, c: u32| recipe.is_skipped(r, c);
-    let placement =
-        grid::place_window(&members, 1, recipe.cols, &skipped, anchor).ok_or_else(|| {
-            VisionError::NoPins {
-                part: part.clone(),
-                msg: "no pins on a common pitch".into(),
-            }
-        })?;
-    let col_of = |a: i64| -> Option<u32> {
-        let c = a - placement.col0;
-        (c >= 0 && c < recipe.cols as i64 && !recipe.is_skipped(0, c as u32)).then_some(c as u32)
+    let pitch_mm = recipe.pitch_mm[0];
+    let fixed_s = recipe.mm_per_px.map(|m| 1.0 / m);
+    // Nothing stands on a housing that was found: every pin is missing.
+    // That is a failed connector, not an image that cannot be judged (a
+    // part with its pins knocked off must count against the yield). The
+    // positions are placed centred on the housing block at the recipe's
+    // scale, or, without `mm_per_px`, with the block taken as `cols`
+    // pitches long (no pin is there to measure the scale from; said in a
+    // note).
+    // A side view's housing is an opaque block: below its top edge every
+    // column of the silhouette runs on about equally far. A top view
+    // inspected with a side recipe shows its tips and holes there, which cut
+    // the runs of the columns through them short: that stays an error.
+    let solid_block = || {
+        let mut runs: Vec<f64> = (hx0_c..=hx1_c.min(cw.saturating_sub(1)))
+            .map(|x| {
+                let y0 = (edge_c(x as f64) + 2.0).ceil().max(0.0) as usize;
+                (y0..ch).take_while(|&y| fg(x, y)).count() as f64
+            })
+            .collect();
+        runs.sort_by(|a, b| a.total_cmp(b));
+        let q = |f: f64| runs.get(((runs.len() as f64 - 1.0) * f) as usize).copied();
+        matches!((q(0.25), q(0.5)), (Some(lo), Some(med)) if med >= 2.0 && lo >= 0.7 * med)
     };
-    let outside = idx
-        .iter()
-        .flatten()
-        .filter(|&&a| col_of(a).is_none())
-        .count();
-    if outside >= 2 && outside * 4 >= placement.score {
-        return Err(VisionError::WrongPart {
-            part,
-            msg: format!(
-                "{outside} pins stand outside the recipe's {} positions ({} inside): a different part?",
-                recipe.cols, placement.score
-            ),
-        });
-    }
-    if placement.ambiguous {
-        warnings.push("pins alone do not place the grid (an end pin missing): the housing block's centre decided".into());
-    }
-    let (mut nn, mut uu) = (Vec::new(), Vec::new());
-    for (b, i) in bars.iter().zip(&idx) {
-        if let Some(c) = i.and_then(col_of) {
-            nn.push(recipe.nominal_uv_mm(0, c).0);
-            uu.push(b.u_px);
+    let placed = if bars.is_empty() {
+        if !solid_block() {
+            return Err(VisionError::NoPins {
+                part,
+                msg: "no pin standing on the housing".into(),
+            });
         }
-    }
-    // One pin on the grid and no mm_per_px: the scale from the pitch
-    // estimate (which then came from the pin's width).
-    let fit_s = fixed_s.or((nn.len() < 2).then_some(pitch_px / pitch_mm));
-    let (a_u, s, inl, rms) =
-        robust_offset_scale(&nn, &uu, fit_s, 0.1).ok_or_else(|| VisionError::NoPins {
-            part: part.clone(),
-            msg: "cannot fit the pin row (need two pins to estimate mm_per_px)".into(),
-        })?;
+        let s = match fixed_s {
+            Some(s) => s,
+            None => {
+                let s = (u_h1 - u_h0).abs() / (recipe.cols as f64 * pitch_mm);
+                warnings.push(format!(
+                    "no pin standing on the housing: positions placed along the housing block, mm_per_px taken as its length over {} pitches ({:.5})",
+                    recipe.cols,
+                    1.0 / s
+                ));
+                s
+            }
+        };
+        if !(s.is_finite() && s > 0.0) {
+            return Err(VisionError::NoPins {
+                part,
+                msg: "no pin standing on the housing".into(),
+            });
+        }
+        let a_u = 0.5 * (u_h0 + u_h1);
+        Some((a_u, s, Vec::new(), 0.0, true, pitch_mm * s))
+    } else {
+        None
+    };
+    let (a_u, s, inl, rms, ambiguous, pitch_px) = match placed {
+        Some(p) => p,
+        None => {
+            // 5. Along-row placement: 1-D lattice, housing anchor, robust fit.
+            // Spacings along the row between neighbouring bars (a missing pin
+            // leaves a double spacing, so neither a median nor the smallest spacing
+            // is the pitch on its own).
+            let spacings: Vec<f64> = {
+                let mut u: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+                u.sort_by(|a, b| a.total_cmp(b));
+                u.windows(2).map(|w| w[1] - w[0]).collect()
+            };
+            let pitch_px = match fixed_s {
+                Some(s) => pitch_mm * s,
+                None => {
+                    // The pins' own width is a second ruler (pin_mm is known): it
+                    // sets the scale of the spacings, which then refine it.
+                    let mut w: Vec<f64> = bars.iter().map(|b| b.width_px).collect();
+                    let width_px = grid::median(&mut w).unwrap_or(f64::NAN);
+                    let prior = pitch_mm * width_px / recipe.pin_mm;
+                    let mut d = spacings.clone();
+                    match refine_pitch(&spacings, prior).or_else(|| grid::median(&mut d)) {
+                        Some(p) => p,
+                        None if prior.is_finite() && prior > 0.0 => {
+                            warnings.push(format!(
+                        "one pin only: mm_per_px taken from its width ({:.5}), not from the pitch",
+                        recipe.pin_mm / width_px
+                    ));
+                            prior
+                        }
+                        None => {
+                            return Err(VisionError::NoPins {
+                                part: part.clone(),
+                                msg: "cannot estimate mm_per_px: no pin width measured".into(),
+                            });
+                        }
+                    }
+                }
+            };
+            // Reject the wrong part: bars off the recipe's lattice, judged on the
+            // row as a whole (a pin bent towards its neighbour changes two
+            // spacings, not the lattice).
+            let u_bars: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
+            let ok_off_px = fixed_s.map_or(0.0, |s| recipe.tolerance.position_mm * s);
+            if fixed_s.is_some()
+                && !row_fits_lattice(&u_bars, pitch_px, ok_off_px.max(0.15 * pitch_px))
+            {
+                let mut d = spacings.clone();
+                let md = grid::median(&mut d).unwrap_or(f64::NAN);
+                return Err(VisionError::WrongPart {
+                    part,
+                    msg: format!(
+                        "pins are {md:.1} px apart, the recipe expects {pitch_px:.1} px ({pitch_mm} mm at {} mm/px)",
+                        recipe.mm_per_px.unwrap_or(f64::NAN)
+                    ),
+                });
+            }
+            let u_ref = bars[0].u_px;
+            let (mut cph, mut sph) = (0.0, 0.0);
+            for b in &bars {
+                let a = (b.u_px - u_ref) / pitch_px;
+                cph += (2.0 * std::f64::consts::PI * a).cos();
+                sph += (2.0 * std::f64::consts::PI * a).sin();
+            }
+            let phase = sph.atan2(cph) / (2.0 * std::f64::consts::PI);
+            let lat_a = |u: f64| (u - u_ref) / pitch_px - phase;
+            let idx: Vec<Option<i64>> = bars
+                .iter()
+                .map(|b| {
+                    let a = lat_a(b.u_px);
+                    ((a - a.round()).abs() < 0.3).then_some(a.round() as i64)
+                })
+                .collect();
+            let members: Vec<(i64, i64)> = idx.iter().flatten().map(|&a| (a, 0)).collect();
+            let anchor = Some((lat_a(0.5 * (u_h0 + u_h1)), 0.0));
+            let skipped = |r: u32, c: u32| recipe.is_skipped(r, c);
+            let placement = grid::place_window(&members, 1, recipe.cols, &skipped, anchor)
+                .ok_or_else(|| VisionError::NoPins {
+                    part: part.clone(),
+                    msg: "no pins on a common pitch".into(),
+                })?;
+            let col_of = |a: i64| -> Option<u32> {
+                let c = a - placement.col0;
+                (c >= 0 && c < recipe.cols as i64 && !recipe.is_skipped(0, c as u32))
+                    .then_some(c as u32)
+            };
+            let outside = idx
+                .iter()
+                .flatten()
+                .filter(|&&a| col_of(a).is_none())
+                .count();
+            if outside >= 2 && outside * 4 >= placement.score {
+                return Err(VisionError::WrongPart {
+                    part,
+                    msg: format!(
+                        "{outside} pins stand outside the recipe's {} positions ({} inside): a different part?",
+                        recipe.cols, placement.score
+                    ),
+                });
+            }
+            if placement.ambiguous {
+                warnings.push("pins alone do not place the grid (an end pin missing): the housing block's centre decided".into());
+            }
+            let (mut nn, mut uu) = (Vec::new(), Vec::new());
+            for (b, i) in bars.iter().zip(&idx) {
+                if let Some(c) = i.and_then(col_of) {
+                    nn.push(recipe.nominal_uv_mm(0, c).0);
+                    uu.push(b.u_px);
+                }
+            }
+            // One pin on the grid and no mm_per_px: the scale from the pitch
+            // estimate (which then came from the pin's width).
+            let fit_s = fixed_s.or((nn.len() < 2).then_some(pitch_px / pitch_mm));
+            let (a_u, s, inl, rms) =
+                robust_offset_scale(&nn, &uu, fit_s, 0.1).ok_or_else(|| VisionError::NoPins {
+                    part: part.clone(),
+                    msg: "cannot fit the pin row (need two pins to estimate mm_per_px)".into(),
+                })?;
+            (a_u, s, inl, rms, placement.ambiguous, pitch_px)
+        }
+    };
     let mm_per_px = 1.0 / s;
-    if fixed_s.is_none() {
+    if fixed_s.is_none() && !bars.is_empty() {
         warnings.push(format!(
             "mm_per_px estimated from the pitch: {mm_per_px:.5}"
         ));
@@ -646,7 +698,7 @@ pub fn inspect_side<P: Px>(
         mm_per_px_estimated: fixed_s.is_none(),
         fit_inliers: inl.iter().filter(|b| **b).count(),
         fit_rms_px: rms,
-        anchored_by_housing: placement.ambiguous,
+        anchored_by_housing: ambiguous,
     };
     let found = Findings {
         pins,

@@ -190,14 +190,22 @@ pub fn inspect_top<P: Px>(
     }
     let (px_mm, py_mm) = (recipe.pitch_mm[0], recipe.pitch_mm[1]);
     let pitch_px = Some((px_mm * s0, py_mm * s0));
-    let lat = match grid::estimate_lattice(
-        &pin_pts,
-        pitch_px,
-        py_mm / px_mm,
-        recipe.rows,
-        recipe.cols,
-    ) {
+    let lattice = |pitch_px| {
+        grid::estimate_lattice(&pin_pts, pitch_px, py_mm / px_mm, recipe.rows, recipe.cols)
+    };
+    let lat = match lattice(pitch_px) {
         Ok(l) => l,
+        // An estimated scale is a prior from the image, not a fact: when
+        // the tip-sized blobs form a lattice at another spacing, that
+        // lattice is the evidence (the fit then takes the scale from it).
+        Err(LatticeError::PitchMismatch { .. })
+            if recipe.mm_per_px.is_none() && lattice(None).is_ok() =>
+        {
+            lattice(None).map_err(|_| VisionError::NoPins {
+                part: part.clone(),
+                msg: "cannot estimate the pitch".into(),
+            })?
+        }
         Err(LatticeError::NoPoints) => {
             return Err(VisionError::NoPins {
                 part,
@@ -323,7 +331,7 @@ pub fn inspect_top<P: Px>(
         tx: c0.0,
         ty: c0.1,
     };
-    let (sim, inliers, rms) = if model.len() >= 2 {
+    let (mut sim, mut inliers, mut rms) = if model.len() >= 2 {
         match fit::robust_similarity(&model, &image, fixed, Some(init), 0.1) {
             Some(f) => {
                 let n = f.inlier.iter().filter(|b| **b).count();
@@ -360,7 +368,7 @@ pub fn inspect_top<P: Px>(
             100.0 * rms / pitch_px
         ));
     }
-    let mm_per_px = 1.0 / sim.s;
+    let mut mm_per_px = 1.0 / sim.s;
     if fixed.is_none() {
         warnings.push(format!(
             "mm_per_px estimated from the pitch: {mm_per_px:.5}"
@@ -370,7 +378,7 @@ pub fn inspect_top<P: Px>(
 
     // Assign blobs to positions: nearest first, pin-like blobs preferred.
     let positions = recipe.positions();
-    let nominal: Vec<(f64, f64)> = positions
+    let mut nominal: Vec<(f64, f64)> = positions
         .iter()
         .map(|&(r, c)| {
             let (u, v) = recipe.nominal_uv_mm(r, c);
@@ -438,6 +446,63 @@ pub fn inspect_top<P: Px>(
         warnings.push(format!(
             "tips blurred (edge σ ≈ {blur_sigma:.1} px on {pin_px:.1} px tips): tip areas judged by their energy against the neighbouring tips'"
         ));
+    }
+    // Under blur, the centres of intact tips from a model of the tip in
+    // its clearance hole (`blur_tip`), then the grid fitted again to them.
+    let refined = if blur_sigma > super::blur_tip::MIN_SIGMA_PX {
+        let intact: Vec<(usize, usize)> = pos_cand
+            .iter()
+            .enumerate()
+            .filter_map(|(pi, c)| c.map(|ci| (pi, ci)))
+            .filter(|&(_, ci)| {
+                let a = area_ratio_of(&cands, &assigned, ci, tip_px, blurred);
+                cands[ci].pinlike && a >= ta_lo && a <= ta_hi
+            })
+            .collect();
+        super::blur_tip::refine_centres(
+            plane,
+            sign,
+            recipe,
+            &sim,
+            &nominal,
+            &intact,
+            &mut cands,
+            blur_sigma,
+            min_pitch_px,
+        )
+    } else {
+        Vec::new()
+    };
+    if refined.len() >= 2 {
+        let model: Vec<(f64, f64)> = refined
+            .iter()
+            .map(|&(pi, _)| {
+                let (r, c) = positions[pi];
+                recipe.nominal_uv_mm(r, c)
+            })
+            .collect();
+        let image: Vec<(f64, f64)> = refined
+            .iter()
+            .map(|&(_, ci)| (cands[ci].m.x, cands[ci].m.y))
+            .collect();
+        if let Some(f) = fit::robust_similarity(&model, &image, fixed, Some(sim), 0.1) {
+            sim = f.sim;
+            inliers = f.inlier.iter().filter(|b| **b).count();
+            rms = f.rms_px;
+            for (pi, &(r, c)) in positions.iter().enumerate() {
+                let (u, v) = recipe.nominal_uv_mm(r, c);
+                nominal[pi] = sim.apply(u, v);
+            }
+            if fixed.is_none() {
+                mm_per_px = 1.0 / sim.s;
+                if let Some(w) = warnings
+                    .iter_mut()
+                    .find(|w| w.starts_with("mm_per_px estimated"))
+                {
+                    *w = format!("mm_per_px estimated from the pitch: {mm_per_px:.5}");
+                }
+            }
+        }
     }
     let area_of =
         |cands: &[Candidate], ci: usize| area_ratio_of(cands, &assigned, ci, tip_px, blurred);

@@ -110,3 +110,101 @@ fn rendered_truth_agrees_with_the_image() {
     }
     assert_eq!(checked, 4);
 }
+
+#[test]
+fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
+    // Heavy defocus, no noise: every intact tip stands 0.8 × position_mm
+    // off its hole's centre, in a random direction. The housing's blurred
+    // light beside the near side of the hole used to pull the measured
+    // centre outward by 0.2–0.4 px (ok pins called bent); the model of the
+    // tip in its hole (`blur_tip`) measures it where it is.
+    use crate::vision::{InspectOptions, inspect_gray};
+    let mut checked = 0;
+    let (mut worst, mut worst_band): (f64, f64) = (0.0, 0.0);
+    for seed in 0..60 {
+        let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Top));
+        if c.factors.tip_px < 7.0 {
+            continue;
+        }
+        c.factors.noise_dn = 0.0;
+        c.factors.blur_px = 2.2;
+        c.factors.jpeg_quality = None;
+        c.recipe.mm_per_px = Some(c.factors.mm_per_px);
+        c.extras.clear();
+        let tol = c.recipe.tolerance.position_mm;
+        for (i, p) in c.pins.iter_mut().enumerate() {
+            p.damage = Damage::None;
+            p.present = true;
+            let a = 2.399 * (i as f64 + seed as f64);
+            p.offset_mm = (0.8 * tol * a.cos(), 0.8 * tol * a.sin());
+        }
+        let r = c.render().unwrap();
+        let ins = inspect_gray(
+            &c.recipe,
+            &r.gray,
+            r.info.clone(),
+            &InspectOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let cmp = r.compare(&c.factors, &ins);
+        assert!(
+            cmp.status_mismatches.is_empty(),
+            "seed {seed}: {:?}",
+            cmp.status_mismatches
+        );
+        // The guard band between an ok pin (≤ 0.85 × position_mm) and
+        // the limit, in px: a centre error inside it cannot flip a status.
+        let band_px = 0.15 * tol / c.factors.mm_per_px;
+        for e in Rendered::ok_centre_errors(&cmp) {
+            worst = worst.max(e);
+            worst_band = worst_band.max(e / band_px);
+        }
+        checked += 1;
+        if checked == 6 {
+            break;
+        }
+    }
+    assert_eq!(checked, 6);
+    eprintln!(
+        "blurred off-centre tips: worst ok-pin centre error {worst:.3} px, {worst_band:.2} of the guard band"
+    );
+    assert!(
+        worst_band < 1.0,
+        "worst ok-pin centre error {worst:.3} px = {worst_band:.2} × the guard band"
+    );
+}
+
+#[test]
+fn a_side_view_with_every_pin_missing_is_a_failed_connector() {
+    use crate::vision::{InspectOptions, inspect_gray};
+    let mut checked = 0;
+    for seed in 0..40 {
+        let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Side));
+        if c.recipe.cols > 3 {
+            continue;
+        }
+        for p in &mut c.pins {
+            p.present = false;
+        }
+        c.extras.clear();
+        let r = c.render().unwrap();
+        let ins = inspect_gray(
+            &c.recipe,
+            &r.gray,
+            r.info.clone(),
+            &InspectOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        assert_eq!(ins.verdict, Verdict::Fail, "seed {seed}");
+        assert!(
+            ins.pins.iter().all(|p| p.status == PinStatus::Missing),
+            "seed {seed}"
+        );
+        assert_eq!(ins.pins.len(), c.pins.len());
+        checked += 1;
+        if checked == 3 {
+            break;
+        }
+    }
+    assert_eq!(checked, 3);
+}

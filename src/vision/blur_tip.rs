@@ -1,0 +1,407 @@
+//! Centre of a blurred tip from a model of the tip in its clearance hole.
+//!
+//! Under defocus a tip's edge spreads over several pixels, and so do the
+//! edges around it: the dark clearance gap and the housing beyond. A tip
+//! that stands off-centre in its hole (an ok pin near the position limit)
+//! has the housing close on one side and the gap wide on the other, so the
+//! blurred housing light lifts the foot of the near edge only. Any centroid
+//! of the tip's own pixels (coverage, thresholded, intensity) moves towards
+//! the housing, i.e. outward — the offset is over-stated exactly where it
+//! decides bent against ok (0.3–0.4 px at blur σ 2–2.5 px).
+//!
+//! The fix is to model what is there instead of hoping it cancels: the
+//! blurred image around a tip is
+//!
+//! ```text
+//! I(x) = a0 + gx·x + gy·y + a_hole · B_σ[hole](x − n) + a_tip · B_σ[tip](x − c)
+//! ```
+//!
+//! with `B_σ[shape]` the shape's indicator convolved with a Gaussian of σ
+//! (closed form with erf: a square is a product of two erf differences in
+//! the part's axes, a disc is approximated radially), `n` the hole's centre
+//! (the fitted nominal position: the hole is machined there, the pin
+//! deviates from it), `c` the tip's centre. The levels and the background
+//! plane are linear and solved exactly for each trial of the non-linear
+//! parameters (c, tip half-width, hole half-width, σ), which a damped
+//! Gauss–Newton (Levenberg–Marquardt) iteration fits. Both shapes are
+//! symmetric about their own centres, so what the model does not describe
+//! (a dome on the tip, rounded corners, a slightly different hole shape)
+//! is symmetric too and does not move `c` to first order; what moved the
+//! centroid — the housing's light — is now part of the model.
+
+use super::fit::Similarity;
+use super::gray::{Plane, Px};
+use super::recipe::{PinShape, Recipe};
+use super::tip_levels::Candidate;
+
+/// Edge spread (px, the tips' median) above which the model replaces the
+/// coverage centroid; below it the coverage centroid is exact already.
+pub(crate) const MIN_SIGMA_PX: f64 = 0.8;
+
+/// Refines the centres of the intact tips `intact` ((position, candidate)
+/// pairs) in place; returns the pairs whose fit settled. `nominal` holds the
+/// positions' fitted nominal centres (the holes' centres), px.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refine_centres<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    recipe: &Recipe,
+    sim: &Similarity,
+    nominal: &[(f64, f64)],
+    intact: &[(usize, usize)],
+    cands: &mut [Candidate],
+    blur_sigma: f64,
+    min_pitch_px: f64,
+) -> Vec<(usize, usize)> {
+    let half_w = 0.5 * recipe.pin_mm * sim.s;
+    let window = (1.5 * half_w + 3.0 * blur_sigma + 2.0).min(0.5 * min_pitch_px);
+    let mut done = Vec::with_capacity(intact.len());
+    for &(pi, ci) in intact {
+        let m = &cands[ci].m;
+        let prior = TipPrior {
+            round: recipe.pin_shape == PinShape::Round,
+            theta: sim.theta,
+            half_w,
+            sigma: blur_sigma,
+            hole: nominal[pi],
+            window,
+        };
+        let Some(f) = fit_tip(plane, sign, (m.x, m.y), &prior) else {
+            continue;
+        };
+        // A fit far from the coverage centroid has locked onto something
+        // else (a neighbour, the housing): keep the centroid.
+        if (f.x - m.x).hypot(f.y - m.y) > 0.2 * half_w + 0.5 {
+            continue;
+        }
+        let m = &mut cands[ci].m;
+        m.x = f.x;
+        m.y = f.y;
+        done.push((pi, ci));
+    }
+    done
+}
+
+/// What the fit knows before it starts.
+#[derive(Debug, Clone, Copy)]
+pub struct TipPrior {
+    /// Round tip and hole (disc) or square ones.
+    pub round: bool,
+    /// The part's rotation (radians), image axes.
+    pub theta: f64,
+    /// The nominal tip's half-width, px.
+    pub half_w: f64,
+    /// The edge spread measured on the tips, px (start value of σ).
+    pub sigma: f64,
+    /// The hole's centre (the fitted nominal position), px.
+    pub hole: (f64, f64),
+    /// Half-size of the square window around `hole`, px.
+    pub window: f64,
+}
+
+/// The fitted tip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TipFit {
+    pub x: f64,
+    pub y: f64,
+    pub half_w: f64,
+    pub hole_half: f64,
+    pub sigma: f64,
+    /// Tip level above the hole's (sign space).
+    pub a_tip: f64,
+    /// RMS residual of the fit (sample units).
+    pub rms: f64,
+}
+
+/// erf, Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7): the model needs
+/// a few million evaluations per image, and this precision is far below
+/// the noise of any pixel.
+#[inline]
+fn erf(x: f64) -> f64 {
+    let s = x.signum();
+    let x = x.abs();
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let y = 1.0
+        - (((((1.061_405_429 * t - 1.453_152_027) * t) + 1.421_413_741) * t - 0.284_496_736) * t
+            + 0.254_829_592)
+            * t
+            * (-x * x).exp();
+    s * y
+}
+
+/// A blurred centred interval [−h, h] at u: ½ [erf((h − u)/√2σ) + erf((h + u)/√2σ)].
+#[inline]
+fn band(u: f64, h: f64, k: f64) -> f64 {
+    0.5 * (erf((h - u) * k) + erf((h + u) * k))
+}
+
+struct Samples {
+    /// Pixel positions relative to the hole centre, in the part's axes.
+    u: Vec<f64>,
+    v: Vec<f64>,
+    /// Positions relative to the hole centre, image axes (background plane).
+    x: Vec<f64>,
+    y: Vec<f64>,
+    val: Vec<f64>,
+}
+
+/// Non-linear parameters: tip centre (part axes, relative to the hole
+/// centre), tip half-width, hole half-width, σ.
+type Params = [f64; 5];
+
+fn shape(round: bool, du: f64, dv: f64, h: f64, k: f64) -> f64 {
+    if round {
+        let r = du.hypot(dv);
+        band(r, h, k)
+    } else {
+        band(du, h, k) * band(dv, h, k)
+    }
+}
+
+/// Residuals of the linear least-squares solution for `p`; returns the
+/// residual vector, the sum of squares and the tip level.
+fn residuals(s: &Samples, round: bool, p: &Params, out: &mut Vec<f64>) -> Option<(f64, f64)> {
+    let k = std::f64::consts::FRAC_1_SQRT_2 / p[4].max(1e-3);
+    let n = s.val.len();
+    // Columns: 1, x, y, hole, tip.
+    const M: usize = 5;
+    let mut cols: [Vec<f64>; 2] = [Vec::with_capacity(n), Vec::with_capacity(n)];
+    let mut ata = [[0f64; M]; M];
+    let mut aty = [0f64; M];
+    // The tip occludes the hole and, where it stands past the hole's rim,
+    // the housing: the scene is housing + (hole − housing)·[H ∪ T] +
+    // (tip − hole)·[T], and [H ∪ T] = [H] + [T] − [H ∩ T]. Square: H ∩ T
+    // is a rectangle (both in the part's axes), blurred exactly; round:
+    // the blurred lens is taken as the smaller of the two blurred discs
+    // (exact where either edge is sharp or far).
+    let (w, h) = (p[2], p[3]);
+    let iu = (p[0] - w).max(-h)..(p[0] + w).min(h);
+    let iv = (p[1] - w).max(-h)..(p[1] + w).min(h);
+    let interval = |x: f64, r: &std::ops::Range<f64>| {
+        if r.end > r.start {
+            0.5 * (erf((r.end - x) * k) - erf((r.start - x) * k))
+        } else {
+            0.0
+        }
+    };
+    for i in 0..n {
+        let hole = shape(round, s.u[i], s.v[i], h, k);
+        let tip = shape(round, s.u[i] - p[0], s.v[i] - p[1], w, k);
+        let both = if round {
+            hole.min(tip)
+        } else {
+            interval(s.u[i], &iu) * interval(s.v[i], &iv)
+        };
+        let hole = hole + tip - both;
+        cols[0].push(hole);
+        cols[1].push(tip);
+        let a = [1.0, s.x[i], s.y[i], hole, tip];
+        for r in 0..M {
+            aty[r] += a[r] * s.val[i];
+            for c in r..M {
+                ata[r][c] += a[r] * a[c];
+            }
+        }
+    }
+    for r in 0..M {
+        for c in 0..r {
+            ata[r][c] = ata[c][r];
+        }
+    }
+    let coef = solve_sym(ata, aty)?;
+    out.clear();
+    let mut ss = 0.0;
+    for i in 0..n {
+        let m = coef[0]
+            + coef[1] * s.x[i]
+            + coef[2] * s.y[i]
+            + coef[3] * cols[0][i]
+            + coef[4] * cols[1][i];
+        let r = s.val[i] - m;
+        ss += r * r;
+        out.push(r);
+    }
+    Some((ss, coef[4]))
+}
+
+/// Solves a small symmetric positive (semi-)definite system by Gaussian
+/// elimination with partial pivoting; `None` when singular.
+fn solve_sym<const M: usize>(mut a: [[f64; M]; M], mut b: [f64; M]) -> Option<[f64; M]> {
+    let scale = (0..M)
+        .map(|i| a[i][i].abs())
+        .fold(0.0, f64::max)
+        .max(1e-300);
+    for col in 0..M {
+        let piv = (col..M).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[piv][col].abs() < 1e-12 * scale {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in col + 1..M {
+            let f = a[r][col] / a[col][col];
+            for c in col..M {
+                a[r][c] -= f * a[col][c];
+            }
+            b[r] -= f * b[col];
+        }
+    }
+    let mut x = [0f64; M];
+    for r in (0..M).rev() {
+        let mut acc = b[r];
+        for c in r + 1..M {
+            acc -= a[r][c] * x[c];
+        }
+        x[r] = acc / a[r][r];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+fn clamp_params(p: &mut Params, prior: &TipPrior) {
+    let w0 = prior.half_w;
+    p[2] = p[2].clamp(0.6 * w0, 1.5 * w0);
+    p[3] = p[3].clamp(p[2] + 0.05, 3.0 * w0 + 1.0);
+    p[4] = p[4].clamp(0.2, 3.0 * prior.sigma.max(0.5) + 1.0);
+}
+
+/// Fits the tip model around `prior.hole`, starting from the tip centre
+/// `start` (px). `None` when the window is too small or the fit does not
+/// settle on a tip brighter than its hole.
+pub fn fit_tip<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    start: (f64, f64),
+    prior: &TipPrior,
+) -> Option<TipFit> {
+    let (hx, hy) = prior.hole;
+    let r = prior.window;
+    let x0 = (hx - r).floor().max(0.0) as usize;
+    let y0 = (hy - r).floor().max(0.0) as usize;
+    let x1 = ((hx + r).ceil() as usize + 1).min(plane.w);
+    let y1 = ((hy + r).ceil() as usize + 1).min(plane.h);
+    if x1 <= x0 + 4 || y1 <= y0 + 4 {
+        return None;
+    }
+    // Large windows are sampled on a sparser grid: the fit needs the
+    // edges' shape, not every pixel (cost ∝ samples).
+    let stride = (((x1 - x0) * (y1 - y0)) as f64 / 1500.0)
+        .sqrt()
+        .ceil()
+        .max(1.0) as usize;
+    let (sn, cs) = prior.theta.sin_cos();
+    let mut s = Samples {
+        u: Vec::new(),
+        v: Vec::new(),
+        x: Vec::new(),
+        y: Vec::new(),
+        val: Vec::new(),
+    };
+    for y in (y0..y1).step_by(stride) {
+        for x in (x0..x1).step_by(stride) {
+            let (dx, dy) = (x as f64 - hx, y as f64 - hy);
+            s.u.push(cs * dx + sn * dy);
+            s.v.push(-sn * dx + cs * dy);
+            s.x.push(dx / r);
+            s.y.push(dy / r);
+            s.val.push((sign * plane.data[y * plane.w + x].f()) as f64);
+        }
+    }
+    let (dx, dy) = (start.0 - hx, start.1 - hy);
+    let mut p: Params = [
+        cs * dx + sn * dy,
+        -sn * dx + cs * dy,
+        prior.half_w,
+        1.25 * prior.half_w + 0.5,
+        prior.sigma.max(0.5),
+    ];
+    clamp_params(&mut p, prior);
+    let mut res = Vec::new();
+    let (mut ss, mut a_tip) = residuals(&s, prior.round, &p, &mut res)?;
+    let mut lambda = 1e-3;
+    let mut jac: Vec<Vec<f64>> = vec![Vec::new(); 5];
+    let mut tmp = Vec::new();
+    for _ in 0..15 {
+        // Forward-difference Jacobian of the (projected) residuals.
+        for (j, col) in jac.iter_mut().enumerate() {
+            let d = 1e-4 * (1.0 + p[j].abs());
+            let mut q = p;
+            q[j] += d;
+            residuals(&s, prior.round, &q, &mut tmp)?;
+            col.clear();
+            col.extend(tmp.iter().zip(&res).map(|(a, b)| (a - b) / d));
+        }
+        let mut jtj = [[0f64; 5]; 5];
+        let mut jtr = [0f64; 5];
+        for a in 0..5 {
+            for b in a..5 {
+                jtj[a][b] = jac[a].iter().zip(&jac[b]).map(|(x, y)| x * y).sum();
+                jtj[b][a] = jtj[a][b];
+            }
+            jtr[a] = -jac[a].iter().zip(&res).map(|(x, y)| x * y).sum::<f64>();
+        }
+        let mut improved = false;
+        let mut step_len = 0.0;
+        for _ in 0..8 {
+            let mut m = jtj;
+            for (i, row) in m.iter_mut().enumerate() {
+                row[i] += lambda * jtj[i][i].max(1e-9);
+            }
+            let Some(step) = solve_sym(m, jtr) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let mut q = p;
+            for i in 0..5 {
+                q[i] += step[i];
+            }
+            clamp_params(&mut q, prior);
+            if let Some((ss2, a2)) = residuals(&s, prior.round, &q, &mut tmp)
+                && ss2 < ss
+            {
+                step_len = (q[0] - p[0]).hypot(q[1] - p[1]);
+                p = q;
+                ss = ss2;
+                a_tip = a2;
+                std::mem::swap(&mut res, &mut tmp);
+                lambda = (lambda * 0.3).max(1e-7);
+                improved = true;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved || step_len < 1e-3 {
+            break;
+        }
+    }
+    if !(a_tip > 0.0) {
+        return None;
+    }
+    let (u, v) = (p[0], p[1]);
+    Some(TipFit {
+        x: hx + cs * u - sn * v,
+        y: hy + sn * u + cs * v,
+        half_w: p[2],
+        hole_half: p[3],
+        sigma: p[4],
+        a_tip,
+        rms: (ss / s.val.len() as f64).sqrt(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn erf_matches_known_values() {
+        for (x, e) in [
+            (0.0, 0.0),
+            (0.5, 0.520_499_877_8),
+            (1.0, 0.842_700_792_9),
+            (2.0, 0.995_322_265),
+        ] {
+            assert!((erf(x) - e).abs() < 2e-7, "{x}");
+            assert!((erf(-x) + e).abs() < 2e-7, "{x}");
+        }
+    }
+}
