@@ -137,6 +137,8 @@ pub struct LiveSummary {
 pub struct Follower {
     inputs: FollowInputs,
     logs: Vec<LogFollow>,
+    /// Logs finished and let go ([`Follower::retire`]), as the summary lists them.
+    retired: Vec<FileEvent>,
     folders: Vec<FolderFollow>,
     queue: VecDeque<ImageJob>,
     alarms: Alarms,
@@ -162,6 +164,7 @@ impl Follower {
         let alarms = Alarms::new(inputs.alarms.clone());
         let mut f = Follower {
             logs: Vec::new(),
+            retired: Vec::new(),
             folders: Vec::new(),
             queue: VecDeque::new(),
             alarms,
@@ -287,7 +290,12 @@ impl Follower {
     /// Counts so far.
     pub fn summary(&self) -> LiveSummary {
         let mut s = self.counts.clone();
-        s.logs = self.logs.iter().map(LogFollow::file_event).collect();
+        s.logs = self
+            .retired
+            .iter()
+            .cloned()
+            .chain(self.logs.iter().map(LogFollow::file_event))
+            .collect();
         s.yields = (self.order > 0).then(|| self.yields.report());
         s
     }
@@ -359,6 +367,7 @@ impl Follower {
         }
         self.rotate(&mut b);
         self.inspect(&mut b);
+        self.retire();
         b.t0_ns = self.t0;
         b.active_alarms = self.alarms.active();
         for e in &b.events {
@@ -632,6 +641,27 @@ impl Follower {
         }
     }
 
+    /// Lets go of the logs that are done and told, but the newest: their
+    /// decoder, cycle tracker, process judge and open file (which holds a
+    /// deleted file's disk space) go, their last state stays for the
+    /// summary. A shift's rotated files (one every 20 minutes on a line)
+    /// must not accumulate in memory.
+    fn retire(&mut self) {
+        let Some(newest) = self.logs.iter().map(|l| l.started).max() else {
+            return;
+        };
+        let done = |l: &LogFollow| {
+            l.started < newest
+                && l.told == Some(l.state)
+                && (matches!(l.state, FileState::Finished | FileState::Abandoned)
+                    || (l.state == FileState::Deleted && l.tail.state == TailState::Finished))
+        };
+        let (gone, keep): (Vec<LogFollow>, Vec<LogFollow>) =
+            std::mem::take(&mut self.logs).into_iter().partition(done);
+        self.logs = keep;
+        self.retired.extend(gone.iter().map(LogFollow::file_event));
+    }
+
     /// Inspects the queued images (in parallel, reported in order), at
     /// most [`IMAGES_PER_POLL`] of them.
     fn inspect(&mut self, b: &mut LiveBatch) {
@@ -718,5 +748,65 @@ impl Follower {
             l.tell(&mut b);
         }
         b
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicBool;
+    use std::time::Duration;
+
+    #[test]
+    fn rotated_logs_once_finished_are_let_go_but_still_listed() {
+        let d = tempfile::tempdir().unwrap();
+        let opts = crate::live::sim::SimOptions {
+            out: d.path().join("run.mcap"),
+            rpm: 1500.0,
+            rate: 8.0,
+            duration_s: 8.0,
+            rotate_s: Some(2.0),
+            spindle_hz: 1000.0,
+            force_hz: 2000.0,
+            displacement_hz: 2000.0,
+            ..Default::default()
+        };
+        let first = d.path().join("run-001.mcap");
+        let mut f = Follower::new(FollowInputs {
+            paths: vec![first],
+            ..Default::default()
+        });
+        let rig = std::thread::spawn(move || {
+            crate::live::sim::run(&opts, &AtomicBool::new(false)).unwrap()
+        });
+        let mut most_logs = 0;
+        while !rig.is_finished() {
+            f.poll(None);
+            most_logs = most_logs.max(f.logs.len());
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let report = rig.join().unwrap();
+        for _ in 0..100 {
+            f.poll(None);
+            if f.all_finished() && !f.behind() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert!(f.all_finished());
+        assert!(report.files.len() >= 4, "{:?}", report.files);
+        // Every file listed once, finished; only the newest still held.
+        let s = f.summary();
+        assert_eq!(s.logs.len(), report.files.len(), "{:?}", s.logs);
+        assert!(
+            s.logs.iter().all(|l| l.state == FileState::Finished),
+            "{:?}",
+            s.logs
+        );
+        assert_eq!(f.logs.len(), 1);
+        assert!(
+            most_logs <= 2,
+            "at most the finishing and the new file: {most_logs}"
+        );
     }
 }
