@@ -1,0 +1,57 @@
+//! The follower's tests (beside it: `follower.rs` is at the house's 800-line mark).
+
+use super::*;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+#[test]
+fn rotated_logs_once_finished_are_let_go_but_still_listed() {
+    let d = tempfile::tempdir().unwrap();
+    let opts = crate::live::sim::SimOptions {
+        out: d.path().join("run.mcap"),
+        rpm: 1500.0,
+        rate: 8.0,
+        duration_s: 8.0,
+        rotate_s: Some(2.0),
+        spindle_hz: 1000.0,
+        force_hz: 2000.0,
+        displacement_hz: 2000.0,
+        ..Default::default()
+    };
+    let first = d.path().join("run-001.mcap");
+    let mut f = Follower::new(FollowInputs {
+        paths: vec![first],
+        ..Default::default()
+    });
+    let rig =
+        std::thread::spawn(move || crate::live::sim::run(&opts, &AtomicBool::new(false)).unwrap());
+    let mut most_logs = 0;
+    while !rig.is_finished() {
+        f.poll(None);
+        most_logs = most_logs.max(f.logs.len());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let report = rig.join().unwrap();
+    for _ in 0..100 {
+        f.poll(None);
+        if f.all_finished() && !f.behind() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(f.all_finished());
+    assert!(report.files.len() >= 4, "{:?}", report.files);
+    // Every file listed once, finished; only the newest still held.
+    let s = f.summary();
+    assert_eq!(s.logs.len(), report.files.len(), "{:?}", s.logs);
+    assert!(
+        s.logs.iter().all(|l| l.state == FileState::Finished),
+        "{:?}",
+        s.logs
+    );
+    assert_eq!(f.logs.len(), 1);
+    assert!(
+        most_logs <= 2,
+        "at most the finishing and the new file: {most_logs}"
+    );
+}
