@@ -7,6 +7,79 @@
 
 use super::{Stats, StepError, StepperConfig, System, Tolerance, wrms};
 
+/// The step-size controller of Hairer's explicit codes (DOPRI5, DOP853):
+/// the new step from the error norm with Lund's stabilisation (β; 0 for
+/// DOP853's plain controller), the ratio bounds, the last accepted error,
+/// and no growth right after a rejection.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PiControl {
+    safe: f64,
+    /// Smallest and largest step ratio hnew/h.
+    fac1: f64,
+    fac2: f64,
+    /// Exponent of the error (1/(q+1) − 0.75 β).
+    expo1: f64,
+    beta: f64,
+    facold: f64,
+    rejected_last: bool,
+}
+
+impl PiControl {
+    pub(crate) const fn new(safe: f64, fac1: f64, fac2: f64, expo1: f64, beta: f64) -> Self {
+        Self {
+            safe,
+            fac1,
+            fac2,
+            expo1,
+            beta,
+            facold: 1e-4,
+            rejected_last: false,
+        }
+    }
+
+    /// Forgets the history (a restart: no last error, no rejection).
+    pub(crate) fn restart(&mut self) {
+        self.facold = 1e-4;
+        self.rejected_last = false;
+    }
+
+    /// err^expo1 and the step it proposes after a step of `h` (`fixed`:
+    /// the fixed step of a non-adaptive run).
+    pub(crate) fn propose(&self, err: f64, h: f64, fixed: Option<f64>) -> (f64, f64) {
+        let fac11 = err.powf(self.expo1);
+        let fac = (fac11 / self.facold.powf(self.beta) / self.safe)
+            .clamp(1.0 / self.fac2, 1.0 / self.fac1);
+        (fac11, fixed.unwrap_or(h / fac))
+    }
+
+    /// The step after an accepted one with error `err`: `hnew` from
+    /// [`propose`](Self::propose), not larger than `h` after a rejection.
+    pub(crate) fn accept(&mut self, err: f64, h: f64, hnew: f64) -> f64 {
+        self.facold = err.max(1e-4);
+        let hnew = if self.rejected_last {
+            hnew.min(h)
+        } else {
+            hnew
+        };
+        self.rejected_last = false;
+        hnew
+    }
+
+    /// The retry after a step rejected for its error (`fac11` from
+    /// [`propose`](Self::propose)).
+    pub(crate) fn reject(&mut self, h: f64, fac11: f64) -> f64 {
+        self.rejected_last = true;
+        h / (1.0 / self.fac1).min(fac11 / self.safe)
+    }
+
+    /// The retry after a step that left the finite numbers: as small as
+    /// the controller allows.
+    pub(crate) fn reject_non_finite(&mut self, h: f64) -> f64 {
+        self.rejected_last = true;
+        h * self.fac1
+    }
+}
+
 /// Where a stepper is: the current point and its derivative, and the start
 /// of the last step (the interval its dense output covers).
 #[derive(Debug, Clone)]

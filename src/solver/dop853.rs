@@ -5,15 +5,13 @@
 //! ([`Dop853::prepare_dense`]), so steps that need no interpolation cost 12
 //! evaluations, not 15.
 
-use super::control::Position;
+use super::control::{PiControl, Position};
 use super::control::{StiffnessMonitor, derivative_at_end, first_step, trial_step};
 use super::dop853_coef::*;
 use super::{Stats, StepError, StepperConfig, System, all_finite};
 
-const SAFE: f64 = 0.9;
-const FAC1: f64 = 0.333;
-const FAC2: f64 = 6.0;
-const EXPO1: f64 = 1.0 / 8.0;
+/// DOP853's controller: safety 0.9, ratios 1/3–6, err^(1/8), no β.
+const CONTROL: PiControl = PiControl::new(0.9, 0.333, 6.0, 1.0 / 8.0, 0.0);
 /// h·|λ| where DOP853's stability region ends on the negative real axis.
 const STIFF_BOUNDARY: f64 = 6.1;
 
@@ -25,8 +23,7 @@ pub struct Dop853<const N: usize> {
     k: [[f64; N]; 16],
     pub h: f64,
     h_used: f64,
-    facold: f64,
-    rejected_last: bool,
+    ctl: PiControl,
     pub(crate) fresh: bool,
     dense_ready: bool,
     rcont: [[f64; N]; 8],
@@ -61,8 +58,7 @@ impl<const N: usize> Dop853<N> {
             k: [[0.0; N]; 16],
             h: cfg.h,
             h_used: 0.0,
-            facold: 1e-4,
-            rejected_last: false,
+            ctl: CONTROL,
             fresh: true,
             dense_ready: true,
             rcont: [[0.0; N]; 8],
@@ -73,8 +69,7 @@ impl<const N: usize> Dop853<N> {
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
         self.pos.restart(sys, t, y, &mut self.stats);
-        self.facold = 1e-4;
-        self.rejected_last = false;
+        self.ctl.restart();
         if fresh_step || !(self.h > 0.0) {
             self.fresh = true;
         }
@@ -165,18 +160,16 @@ impl<const N: usize> Dop853<N> {
             }
             if !err.is_finite() || !all_finite(&ynew) {
                 self.stats.rejected += 1;
-                self.rejected_last = true;
-                h *= FAC1;
+                h = self.ctl.reject_non_finite(h);
                 if h <= t.abs() * f64::EPSILON * 10.0 {
                     return Err(StepError::NonFinite { t });
                 }
                 continue;
             }
-            let fac11 = err.powf(EXPO1);
-            let fac = (fac11 / SAFE).clamp(1.0 / FAC2, 1.0 / FAC1);
-            let mut hnew = if self.cfg.fixed { self.cfg.h } else { h / fac };
+            let (fac11, hnew) = self
+                .ctl
+                .propose(err, h, self.cfg.fixed.then_some(self.cfg.h));
             if err <= 1.0 {
-                self.facold = err.max(1e-4);
                 let fnew = derivative_at_end(sys, tph, &ynew, &mut self.stats)?;
                 self.stats.steps += 1;
                 self.stiffness.observe(
@@ -187,20 +180,15 @@ impl<const N: usize> Dop853<N> {
                     &mut self.stats,
                 );
                 k[12] = fnew;
-                if self.rejected_last {
-                    hnew = hnew.min(h);
-                }
-                self.rejected_last = false;
+                let hnew = self.ctl.accept(err, h, hnew);
                 self.pos.advance((t, y), tph, ynew, fnew);
                 self.h_used = h;
                 self.h = hnew.min(self.cfg.h_max);
                 self.dense_ready = false;
                 return Ok(());
             }
-            hnew = h / (1.0 / FAC1).min(fac11 / SAFE);
-            self.rejected_last = true;
             self.stats.rejected += 1;
-            h = hnew;
+            h = self.ctl.reject(h, fac11);
         }
     }
 

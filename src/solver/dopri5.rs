@@ -2,7 +2,7 @@
 //! (Lund stabilisation, β = 0.04), stiffness detection, and the 4th-order
 //! continuous extension.
 
-use super::control::Position;
+use super::control::{PiControl, Position};
 use super::control::{StiffnessMonitor, first_step, trial_step};
 use super::{Stats, StepError, StepperConfig, System, all_finite, wrms};
 
@@ -43,11 +43,9 @@ const D5: f64 = 701980252875.0 / 199316789632.0;
 const D6: f64 = -1453857185.0 / 822651844.0;
 const D7: f64 = 69997945.0 / 29380423.0;
 
-const SAFE: f64 = 0.9;
-const FAC1: f64 = 0.2; // smallest step ratio hnew/h
-const FAC2: f64 = 10.0; // largest step ratio
 const BETA: f64 = 0.04;
-const EXPO1: f64 = 0.2 - BETA * 0.75;
+/// DOPRI5's controller: safety 0.9, ratios 0.2–10, Lund's β = 0.04.
+const CONTROL: PiControl = PiControl::new(0.9, 0.2, 10.0, 0.2 - BETA * 0.75, BETA);
 /// h·|λ| where DOPRI5's stability region ends on the negative real axis.
 const STIFF_BOUNDARY: f64 = 3.25;
 
@@ -56,8 +54,7 @@ pub struct Dopri5<const N: usize> {
     pub(crate) cfg: StepperConfig<N>,
     pub pos: Position<N>,
     pub h: f64,
-    facold: f64,
-    rejected_last: bool,
+    ctl: PiControl,
     pub(crate) fresh: bool,
     rcont: [[f64; N]; 5],
     stiffness: StiffnessMonitor,
@@ -70,8 +67,7 @@ impl<const N: usize> Dopri5<N> {
             cfg,
             pos: Position::new(),
             h: cfg.h,
-            facold: 1e-4,
-            rejected_last: false,
+            ctl: CONTROL,
             fresh: true,
             rcont: [[0.0; N]; 5],
             stiffness: StiffnessMonitor::default(),
@@ -81,8 +77,7 @@ impl<const N: usize> Dopri5<N> {
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
         self.pos.restart(sys, t, y, &mut self.stats);
-        self.facold = 1e-4;
-        self.rejected_last = false;
+        self.ctl.restart();
         if fresh_step || !(self.h > 0.0) {
             self.fresh = true;
         }
@@ -155,18 +150,16 @@ impl<const N: usize> Dopri5<N> {
                 if !all_finite(&y1) && h < 1e-300 {
                     return Err(StepError::NonFinite { t });
                 }
-                h *= FAC1;
-                self.rejected_last = true;
+                h = self.ctl.reject_non_finite(h);
                 if h <= t.abs() * f64::EPSILON * 10.0 {
                     return Err(StepError::NonFinite { t });
                 }
                 continue;
             }
-            let fac11 = err.powf(EXPO1);
-            let fac = (fac11 / self.facold.powf(BETA) / SAFE).clamp(1.0 / FAC2, 1.0 / FAC1);
-            let mut hnew = if self.cfg.fixed { self.cfg.h } else { h / fac };
+            let (fac11, hnew) = self
+                .ctl
+                .propose(err, h, self.cfg.fixed.then_some(self.cfg.h));
             if err <= 1.0 {
-                self.facold = err.max(1e-4);
                 self.stats.steps += 1;
                 // Stiffness detection (Hairer): h·|λ| from the last two stages.
                 self.stiffness.observe(
@@ -194,18 +187,13 @@ impl<const N: usize> Dopri5<N> {
                             + D7 * k7[i]);
                 }
                 self.rcont = r;
-                if self.rejected_last {
-                    hnew = hnew.min(h);
-                }
-                self.rejected_last = false;
+                let hnew = self.ctl.accept(err, h, hnew);
                 self.pos.advance((t, y), tph, y1, k7);
                 self.h = hnew.min(self.cfg.h_max);
                 return Ok(());
             }
-            hnew = h / (1.0 / FAC1).min(fac11 / SAFE);
-            self.rejected_last = true;
             self.stats.rejected += 1;
-            h = hnew;
+            h = self.ctl.reject(h, fac11);
         }
     }
 
