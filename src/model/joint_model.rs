@@ -63,6 +63,44 @@ pub struct Outputs {
     pub ideal_process_force: f64,
 }
 
+impl Outputs {
+    /// A rigid mechanism's outputs (no clearance: the joint force is the
+    /// ideal one, no penetration, and the "ideal" columns equal the actual
+    /// ones): the closed-form levels and the motor level with c = 0.
+    pub fn rigid(
+        t: f64,
+        (theta2, omega2, alpha2): (f64, f64, f64),
+        motor_torque: f64,
+        s: f64,
+        f: &super::kinetostatics::IdealForces,
+    ) -> Self {
+        Self {
+            t,
+            theta2,
+            omega2,
+            alpha2,
+            motor_torque,
+            s,
+            v4: f.pose.v4,
+            a4: f.pose.a4,
+            alpha3: f.pose.alpha3,
+            f_n: f.joint_force_b(),
+            f_t: 0.0,
+            v_slip: f64::NAN,
+            m12: f.m12,
+            delta: 0.0,
+            delta_dot: 0.0,
+            ecc: [0.0, 0.0],
+            process_force: f.process_force,
+            ideal_s: s,
+            ideal_v: f.pose.v4,
+            ideal_a: f.pose.a4,
+            ideal_m12: f.m12,
+            ideal_process_force: f.process_force,
+        }
+    }
+}
+
 /// A mechanism model integrated by the event loop.
 pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
     /// Index of the quadrature Q_s = ∫(s − s_ideal) dt in the state.

@@ -72,30 +72,7 @@ impl RigidMotorModel {
             (-f.guide_friction * v4, -f.process_force * v4, 0.0),
         );
         let s = f.pose.x4 - self.x4_tdc;
-        Outputs {
-            t,
-            theta2,
-            omega2: w,
-            alpha2,
-            motor_torque: t_motor,
-            s,
-            v4,
-            a4: f.pose.a4,
-            alpha3: f.pose.alpha3,
-            f_n: f.joint_force_b(),
-            f_t: 0.0,
-            v_slip: f64::NAN,
-            m12: f.m12,
-            delta: 0.0,
-            delta_dot: 0.0,
-            ecc: [0.0, 0.0],
-            process_force: f.process_force,
-            ideal_s: s,
-            ideal_v: v4,
-            ideal_a: f.pose.a4,
-            ideal_m12: f.m12,
-            ideal_process_force: f.process_force,
-        }
+        Outputs::rigid(t, (theta2, w, alpha2), t_motor, s, &f)
     }
 }
 

@@ -128,27 +128,36 @@ const GRID_DEG: f64 = 0.1;
 /// The motor rung's comparison grid (see `motor_step`).
 const MOTOR_GRID_DEG: f64 = 0.01;
 
+/// One revolution after one of warm-up at rtol 1e-7, sampled every
+/// `grid_deg`: what every rung is compared on.
+fn one_revolution(
+    p: &Params,
+    level: Level,
+    method: crate::solver::Method,
+    grid_deg: f64,
+) -> Result<SimResult, SimError> {
+    simulate(
+        p,
+        &SimOptions {
+            level,
+            method,
+            rtol: 1e-7,
+            warmup: 1.0,
+            revs: 1.0,
+            grid_deg: Some(grid_deg),
+            ..SimOptions::default()
+        },
+        &Progress::hidden(),
+    )
+}
+
 /// Measures the levels for a scene and picks the cheapest sufficient one.
 pub fn assess(
     p: &Params,
     res: SceneResolution,
     method: crate::solver::Method,
 ) -> Result<FidelityReport, SimError> {
-    let run = |level: Level| {
-        simulate(
-            p,
-            &SimOptions {
-                level,
-                method,
-                rtol: 1e-7,
-                warmup: 1.0,
-                revs: 1.0,
-                grid_deg: Some(GRID_DEG),
-                ..SimOptions::default()
-            },
-            &Progress::hidden(),
-        )
-    };
+    let run = |level: Level| one_revolution(p, level, method, GRID_DEG);
     let kin = run(Level::Kinematic)?;
     let ideal = run(Level::Ideal)?;
     let clear = run(Level::Clearance)?;
@@ -336,21 +345,7 @@ fn motor_step(
     // grid where the samples fall on that drop differs between the two
     // runs by a sample's phase, which the filter turns into a tenth of a
     // newton that is no physics.
-    let run = |q: &Params, level: Level| {
-        simulate(
-            q,
-            &SimOptions {
-                level,
-                method,
-                rtol: 1e-7,
-                warmup: 1.0,
-                revs: 1.0,
-                grid_deg: Some(MOTOR_GRID_DEG),
-                ..SimOptions::default()
-            },
-            &Progress::hidden(),
-        )
-    };
+    let run = |q: &Params, level: Level| one_revolution(q, level, method, MOTOR_GRID_DEG);
     // The ideal joint: periodic after a revolution.
     let mut rigid = p.clone();
     rigid.clearance = 0.0;

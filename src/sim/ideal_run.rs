@@ -16,30 +16,7 @@ pub fn ideal_outputs(ks: &Kinetostatics, theta0: f64, omega: f64, t: f64) -> Out
     let theta2 = theta0 + omega * t;
     let f = ks.at(theta2, omega, 0.0);
     let s = f.pose.x4 - ks.geom.x4_tdc();
-    Outputs {
-        t,
-        theta2,
-        omega2: omega,
-        alpha2: 0.0,
-        motor_torque: f64::NAN,
-        s,
-        v4: f.pose.v4,
-        a4: f.pose.a4,
-        alpha3: f.pose.alpha3,
-        f_n: f.joint_force_b(),
-        f_t: 0.0,
-        v_slip: f64::NAN,
-        m12: f.m12,
-        delta: 0.0,
-        delta_dot: 0.0,
-        ecc: [0.0, 0.0],
-        process_force: f.process_force,
-        ideal_s: s,
-        ideal_v: f.pose.v4,
-        ideal_a: f.pose.a4,
-        ideal_m12: f.m12,
-        ideal_process_force: f.process_force,
-    }
+    Outputs::rigid(t, (theta2, omega, 0.0), f64::NAN, s, &f)
 }
 
 pub fn run(p: &Params, opts: &SimOptions) -> SimResult {
