@@ -5,7 +5,7 @@
 //! event on the new side and restarts there.
 
 use super::runner::Runner;
-use crate::model::joint_model::{InMode, JointModel};
+use crate::model::joint_model::JointModel;
 use crate::solver::roots::{bracket_root, maximize};
 
 /// Points per free-flight step at which δ and δ̇ are sampled on the dense
@@ -30,13 +30,7 @@ pub(super) fn contact_crossing<M: JointModel<N>, const N: usize>(
             crossing = Some((t0, d0, t1, d1));
         } else if dd0 < 0.0 && dd1 > 0.0 {
             // δ turned inside the step: did it dip below zero?
-            let mode = r.model.mode();
-            r.st.prepare_dense(&InMode {
-                model: &r.model,
-                mode,
-            });
-            let st = &r.st;
-            let m = &r.model;
+            let (st, m) = r.dense_in(r.model.mode());
             let (tm, vm, n) = maximize(
                 |tt| -m.penetration(tt, &st.dense(tt)).0,
                 t0,
@@ -57,11 +51,7 @@ pub(super) fn contact_crossing<M: JointModel<N>, const N: usize>(
         // (a double crossing, possibly after a minimum and a maximum
         // of δ) is seen: a positive sample, or δ̇ turning from + to −
         // in a sub-interval whose maximum is positive.
-        let mode = r.model.mode();
-        r.st.prepare_dense(&InMode {
-            model: &r.model,
-            mode,
-        });
+        r.dense_in(r.model.mode());
         let mut prev = (t0, d0, dd0);
         for k in 1..=FREE_SAMPLES {
             let (tk, dk, ddk) = if k == FREE_SAMPLES {
@@ -118,12 +108,7 @@ pub(super) fn process_crossing<M: JointModel<N>, const N: usize>(
         && g0 > 0.0
         && !(g1 > 0.0)
     {
-        r.st.prepare_dense(&InMode {
-            model: &r.model,
-            mode: mode_now,
-        });
-        let st = &r.st;
-        let m = &r.model;
+        let (st, m) = r.dense_in(mode_now);
         let (tp, _, n) = bracket_root(
             |tt| m.process_event(mode_now, tt, &st.dense(tt)).unwrap_or(0.0),
             t0,

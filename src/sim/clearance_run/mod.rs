@@ -29,7 +29,7 @@ use super::summary::{NQ, PeakTracker};
 use super::{Curves, SimError, SimOptions, SimResult, wrap_deg};
 use crate::model::clearance::{ClearanceModel, Mode};
 use crate::model::contact::ProcessMode;
-use crate::model::joint_model::{InMode, JointModel};
+use crate::model::joint_model::JointModel;
 use crate::model::params::Params;
 use crate::progress::Progress;
 use crate::solver::roots::bracket_root;
@@ -299,10 +299,7 @@ pub(crate) fn run_model<M: JointModel<N>, const N: usize>(
             r.st.reset(&r.model, t, y, true);
         } else if let Some((ta, ga, tb, gb)) = crossing {
             let mode = r.model.mode();
-            r.st.prepare_dense(&InMode {
-                model: &r.model,
-                mode,
-            });
+            r.dense_in(mode);
             // The old side's value, kept strictly on its side.
             let ga = if in_contact {
                 ga.max(f64::MIN_POSITIVE)

@@ -81,6 +81,16 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
         t >= self.t_rep
     }
 
+    /// Readies the dense output of the last step, the model run in `mode`
+    /// over it; the stepper to read it from and the model to evaluate it.
+    pub(super) fn dense_in(&mut self, mode: Mode) -> (&Stepper<N>, &M) {
+        self.st.prepare_dense(&InMode {
+            model: &self.model,
+            mode,
+        });
+        (&self.st, &self.model)
+    }
+
     /// Handles the finished segment [ta, tb] of the current step, run in `mode`.
     pub(super) fn finish_segment(&mut self, ta: f64, tb: f64, y_b: &[f64; N], mode: Mode) {
         if !self.in_report(ta) || tb <= ta {
@@ -95,10 +105,7 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
                     break;
                 }
                 if !prepared {
-                    self.st.prepare_dense(&InMode {
-                        model: &self.model,
-                        mode,
-                    });
+                    self.dense_in(mode);
                     prepared = true;
                 }
                 let y = if tg == tb { *y_b } else { self.st.dense(tg) };
@@ -129,10 +136,7 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
         let needs_dense = may_have_zero(dev_a.0, dev_b.0, dev_a.1, dev_b.1)
             || may_have_zero(dev_a.1, dev_b.1, dev_a.2, dev_b.2);
         if needs_dense {
-            self.st.prepare_dense(&InMode {
-                model: &self.model,
-                mode,
-            });
+            self.dense_in(mode);
         }
         {
             let st = &self.st;
@@ -214,13 +218,7 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
     /// stall speed at t0, not at t1): the moment located on the dense
     /// output, said as a crank angle after top dead centre and a revolution.
     pub(super) fn stall(&mut self, t0: f64, t1: f64, theta_start: f64) -> SimError {
-        let mode = self.model.mode();
-        self.st.prepare_dense(&InMode {
-            model: &self.model,
-            mode,
-        });
-        let st = &self.st;
-        let m = &self.model;
+        let (st, m) = self.dense_in(self.model.mode());
         let w = |t: f64| m.stall_margin(&st.dense(t)).unwrap_or(0.0);
         let (w0, w1) = (w(t0), w(t1));
         let (ts, _, _) = if w0 > 0.0 && w1 <= 0.0 {
