@@ -210,6 +210,20 @@ struct RuleState {
     recent: VecDeque<bool>,
 }
 
+impl RuleState {
+    /// Counts a cycle out of bounds (a clean one resets the count): the
+    /// alarm is raised after `consecutive` in a row and cleared by the
+    /// first cycle back.
+    fn streak(&mut self, out: bool, consecutive: usize) -> bool {
+        self.run = if out { self.run + 1 } else { 0 };
+        if self.active {
+            out
+        } else {
+            self.run >= consecutive.max(1)
+        }
+    }
+}
+
 /// The rules' state over a shift (bounded: the last `last` connectors of a
 /// yield rule, the learning cycles of a drift rule).
 #[derive(Debug, Clone)]
@@ -311,16 +325,7 @@ impl Alarms {
                         }
                         continue;
                     };
-                    if x < lo || x > hi {
-                        st.run += 1;
-                    } else {
-                        st.run = 0;
-                    }
-                    let on = if st.active {
-                        st.run > 0
-                    } else {
-                        st.run >= (*consecutive).max(1)
-                    };
+                    let on = st.streak(x < lo || x > hi, *consecutive);
                     Self::set(
                         st,
                         on,
@@ -351,12 +356,7 @@ impl Alarms {
                         continue;
                     }
                     let off = (c.motor_rpm - sp).abs() / sp > *tolerance;
-                    st.run = if off { st.run + 1 } else { 0 };
-                    let on = if st.active {
-                        off
-                    } else {
-                        st.run >= (*consecutive).max(1)
-                    };
+                    let on = st.streak(off, *consecutive);
                     let rpm = c.motor_rpm;
                     Self::set(
                         st,
