@@ -160,7 +160,7 @@ fn speed_accuracy(
                 );
                 for (li, loc) in Localiser::ALL.iter().enumerate() {
                     let t0 = Instant::now();
-                    let m = measure_blob(&plane, 1.0, roi, (x, y), *loc, 3);
+                    let m = measure_blob(&plane, 1.0, roi, (x, y), *loc, 3, None);
                     let dt = t0.elapsed().as_secs_f64() * 1e6;
                     if let Some(m) = m {
                         per[li].0.push((m.x - x).hypot(m.y - y));

@@ -134,34 +134,22 @@ fn percentile(v: &mut [f32], q: f64) -> f32 {
     *x
 }
 
-/// Measures the blob nearest `seed` inside `roi`.
-///
-/// `dilate` is how far (px) beyond the half-level mask the coverage window
-/// reaches (≈ 2 σ of the blur + 1).
-pub fn measure_blob<P: Px>(
-    plane: &Plane<P>,
-    sign: f32,
-    roi: Roi,
-    seed: (f64, f64),
-    loc: Localiser,
-    dilate: usize,
-) -> Option<BlobMeasure> {
-    measure_blob_with(plane, sign, roi, seed, loc, dilate, None)
-}
-
 /// Where, from the local background (0) to the tip's rim level (1), the
-/// coverage that locates a tip's centre starts (see `measure_blob_with`).
+/// coverage that locates a tip's centre starts (see `measure_blob`).
 pub const CENTRE_LEVEL: f32 = 0.5;
 /// Edge spread (px, `BlobMeasure::edge_sigma`) below which a tip's centre
 /// is the full-range coverage centroid, and above which it is the
 /// upper-part one; blended linearly between.
 pub const CENTRE_BLUR: (f64, f64) = (0.6, 1.5);
 
-/// [`measure_blob`] with a floor under the full-coverage level: a blob
-/// fainter than `hi_floor` (the level a tip has at that place) is measured
-/// as the area a tip-bright blob of the same energy would have, so a faint
-/// stain does not count as a large extra.
-pub fn measure_blob_with<P: Px>(
+/// Measures the blob nearest `seed` inside `roi`.
+///
+/// `dilate` is how far (px) beyond the half-level mask the coverage window
+/// reaches (≈ 2 σ of the blur + 1). With a floor under the full-coverage
+/// level (`hi_floor`), a blob fainter than it (the level a tip has at that
+/// place) is measured as the area a tip-bright blob of the same energy
+/// would have, so a faint stain does not count as a large extra.
+pub fn measure_blob<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     roi: Roi,

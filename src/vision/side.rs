@@ -615,7 +615,8 @@ pub fn inspect_side<P: Px>(
             plane.h,
         );
         let seed = coarse.to_full(d.cx, d.cy);
-        let Some(m) = measure::measure_blob(plane, sign, roi, seed, Localiser::Coverage, dilate)
+        let Some(m) =
+            measure::measure_blob(plane, sign, roi, seed, Localiser::Coverage, dilate, None)
         else {
             continue;
         };

@@ -45,7 +45,8 @@ fn measure_candidates<P: Px>(
             plane.h,
         );
         let seed = cs.coarse.to_full(b.cx, b.cy);
-        if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate) {
+        if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate, None)
+        {
             out.push((m, roi, seed));
         }
     }
@@ -532,7 +533,8 @@ pub fn inspect_top<P: Px>(
         };
         let half = (0.9 * pin_px + 2.0).min(0.5 * min_pitch_px);
         let roi = Roi::around(nx, ny, nx, ny, half, plane.w, plane.h);
-        let Some(m) = measure::measure_blob(plane, sign, roi, (nx, ny), opts.localiser, dilate)
+        let Some(m) =
+            measure::measure_blob(plane, sign, roi, (nx, ny), opts.localiser, dilate, None)
         else {
             continue;
         };
@@ -663,7 +665,7 @@ pub fn inspect_top<P: Px>(
         let expected = levels.expected(c.m.x, c.m.y);
         let (m, rho) = match expected {
             Some((t, b)) => {
-                let m = measure::measure_blob_with(
+                let m = measure::measure_blob(
                     plane,
                     sign,
                     c.roi,
