@@ -64,10 +64,12 @@ pub(super) fn force_fit(
     };
     let mut ata = vec![0.0; k * k];
     let mut atb = vec![0.0; k];
-    // The regressors of the fitted samples, k per sample (flat: one allocation).
-    let mut cols: Vec<f64> = Vec::new();
-    let mut ys: Vec<f64> = Vec::new();
-    let mut fixed_part: Vec<f64> = Vec::new();
+    // The regressors of the fitted samples, k per sample (flat: one
+    // allocation, sized for every sample up to the dead centre).
+    let most: usize = cycles.iter().map(|c| c.s.len() / 2).sum();
+    let mut cols: Vec<f64> = Vec::with_capacity(most * k);
+    let mut ys: Vec<f64> = Vec::with_capacity(most);
+    let mut fixed_part: Vec<f64> = Vec::with_capacity(most);
     let mut b = vec![0.0; k];
     let mut prev = vec![0.0; k];
     for c in cycles {
@@ -86,7 +88,8 @@ pub(super) fn force_fit(
         let mut state_wd = 0.0;
         let mut prev_wd = 0.0;
         prev.iter_mut().for_each(|x| *x = 0.0);
-        for j in 0..n {
+        // Nothing after `stop` is fitted, and the filter only looks back.
+        for j in 0..stop {
             let (s, v) = (c.s[j], c.v[j]);
             let d = if s.is_finite() {
                 s - standoff_mm
@@ -115,10 +118,7 @@ pub(super) fn force_fit(
             let y = c.f[j];
             // Samples that carry information: force expected or measured, away from BDC.
             let near_bdc = j.abs_diff(n / 2) <= excl;
-            if j < stop
-                && !near_bdc
-                && y.is_finite()
-                && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5)
+            if !near_bdc && y.is_finite() && (state.iter().any(|x| x.abs() > 1e-9) || y.abs() > 0.5)
             {
                 cols.extend_from_slice(&state);
                 ys.push(y);
@@ -129,12 +129,20 @@ pub(super) fn force_fit(
     let vals: Vec<f64> = match fixed {
         Some(v) => v.to_vec(),
         None => {
+            // The upper triangle only (the products are the same either
+            // way round), mirrored after.
             for ((r, &y), &fw) in cols.chunks_exact(k).zip(&ys).zip(&fixed_part) {
                 for i in 0..k {
                     atb[i] += r[i] * (y - fw);
-                    for j in 0..k {
-                        ata[i * k + j] += r[i] * r[j];
+                    let ri = r[i];
+                    for (a, &rj) in ata[i * k + i..(i + 1) * k].iter_mut().zip(&r[i..]) {
+                        *a += ri * rj;
                     }
+                }
+            }
+            for i in 0..k {
+                for j in 0..i {
+                    ata[i * k + j] = ata[j * k + i];
                 }
             }
             // F_ins at zero depth is 0 by the definition of the standoff (the
