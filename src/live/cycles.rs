@@ -66,6 +66,7 @@ impl Series {
         let i = self.t.partition_point(|&t| t < t0);
         self.t.drain(..i);
         self.v.drain(..i);
+        super::ring::give_back_room(&mut self.t, &mut self.v);
     }
 }
 

@@ -27,8 +27,25 @@ pub fn slide(
     let cut = t.partition_point(|&x| x < last - span_s);
     t.drain(..cut);
     v.drain(..cut);
+    give_back_room(t, v);
     true
 }
+
+/// After the front of a pair of parallel vectors was cut: a burst (a
+/// follower catching up after a stall, minutes of log in one batch) grew
+/// them far past what they hold now, and a vector keeps its room, so give
+/// it back, or one burst sets the memory for the whole shift. Room for half
+/// as much again is kept, so a steady slide never reallocates.
+pub fn give_back_room<A, B>(a: &mut Vec<A>, b: &mut Vec<B>) {
+    if a.capacity() > 2 * a.len() + SHRINK_SLACK {
+        let keep = a.len() + a.len() / 2;
+        a.shrink_to(keep);
+        b.shrink_to(keep);
+    }
+}
+
+/// Spare samples below which a window's vectors are never shrunk.
+const SHRINK_SLACK: usize = 4096;
 
 /// Min/max of a signal over the whole shift in at most `cap` buckets.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -150,5 +167,52 @@ mod tests {
             .fold(f64::NEG_INFINITY, f64::max);
         assert_eq!(max, want);
         assert!(h.width_s() * 64.0 >= 2000.0);
+    }
+
+    #[test]
+    fn a_burst_does_not_keep_its_room() {
+        // 10 s windows at 1 000 samples/s, batches of 0.1 s; then one
+        // batch of 200 s (a follower that caught up), then normal again.
+        let (mut t, mut v) = (Vec::new(), Vec::new());
+        let batch = |from: f64, secs: f64| -> Vec<f64> {
+            (0..(secs * 1000.0) as usize)
+                .map(|i| from + i as f64 * 1e-3)
+                .collect()
+        };
+        let mut now = 0.0;
+        for _ in 0..300 {
+            let nt = batch(now, 0.1);
+            slide(&mut t, &mut v, &nt, &nt, 10.0);
+            now += 0.1;
+        }
+        let steady = t.capacity();
+        assert!(steady <= 2 * 12_500 + SHRINK_SLACK, "{steady}");
+        let nt = batch(now, 200.0);
+        slide(&mut t, &mut v, &nt, &nt, 10.0);
+        now += 200.0;
+        // Given back at the same slide: the burst's room lived only while
+        // it was cut down to the window.
+        assert!(
+            t.capacity() <= 2 * 12_500 + SHRINK_SLACK,
+            "{}",
+            t.capacity()
+        );
+        let mut caps = Vec::new();
+        for _ in 0..300 {
+            let nt = batch(now, 0.1);
+            slide(&mut t, &mut v, &nt, &nt, 10.0);
+            now += 0.1;
+            caps.push(t.capacity());
+        }
+        // The room of a window, and it stays put (no reallocation at every
+        // slide).
+        let last = *caps.last().unwrap();
+        assert!(last <= 2 * 12_500 + SHRINK_SLACK, "{last}");
+        assert_eq!(v.capacity(), t.capacity());
+        assert!(caps[100..].windows(2).all(|w| w[0] == w[1]), "{caps:?}");
+        // The data are the window's: the newest 10–12.5 s.
+        assert!((t.last().unwrap() - now).abs() < 2e-3);
+        assert!(t.last().unwrap() - t.first().unwrap() <= 12.5 + 1e-9);
+        assert_eq!(t, v);
     }
 }

@@ -37,7 +37,7 @@ pub const SUSPECT_S: f64 = 2.0;
 /// follower that has fallen behind (a rig replayed at full speed, an
 /// interface that drew slowly) would otherwise decode minutes of signals
 /// at once, and the allocator keeps such a peak for the rest of a shift.
-pub const MAX_READ: u64 = 4 << 20;
+pub const MAX_READ: u64 = 1 << 20;
 /// Largest record accepted (as the loader's default limit).
 pub const RECORD_LIMIT: u64 = 256 << 20;
 
@@ -571,7 +571,7 @@ mod tests {
 
     #[test]
     fn a_chunk_longer_than_max_read_is_read_whole() {
-        // One chunk of ~6 MB (over the 4 MB read), then the end.
+        // One chunk of ~6 MB (over MAX_READ), then the end.
         let f = log(6 * 1024, 1024, 64 << 20);
         let (bytes, chunks, _) = follow(f.path());
         assert_eq!(chunks, 1);
