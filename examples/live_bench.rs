@@ -32,7 +32,9 @@
 //! photograph once it has been inspected, as a line's archive job would:
 //! only the disk is spared, the follower's work is the same); prints the
 //! resident memory of the follower + TUI process (and of the rig's) at
-//! every eighth of the shift and the growth from the first mark to the last.
+//! every eighth of the shift and the growth from the first mark to the last;
+//! and, read once a second, the median and maximum of each eighth and their
+//! growth from the first eighth to the last.
 
 use pinsight::live::sim::{FlushMark, SimOptions};
 use pinsight::live::{AlarmRules, LiveBatch};
@@ -263,6 +265,11 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
     let started = Instant::now();
     // (eighth of the shift, wall s, RSS kB, the rig's RSS kB, cycles, images)
     let mut marks: Vec<(u64, f64, u64, u64, u64, u64)> = Vec::new();
+    // RSS (kB) once a second of wall time, by eighth of the shift: one
+    // reading is a moment (a batch or a photograph in flight moves it by a
+    // few MB), so each eighth is also summarised by its median and maximum.
+    let mut samples: Vec<Vec<u64>> = vec![Vec::new(); 9];
+    let mut last_sample = Instant::now();
     let mut deleted = std::collections::HashSet::new();
     let mut next_del = 0u64;
     // Ends three quiet seconds after the rig finished.
@@ -287,6 +294,10 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
             // A mark at every eighth of the shift (every hour of 8 h).
             let step = hours * 3600.0 / 8.0;
             let k = (l.latest_s.unwrap_or(0.0) / step).floor() as u64;
+            if last_sample.elapsed() >= Duration::from_secs(1) {
+                last_sample = Instant::now();
+                samples[(k as usize).min(8)].push(rss_kb());
+            }
             if k > marks.last().map_or(0, |m| m.0) {
                 marks.push((
                     k,
@@ -337,6 +348,36 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
             *k as f64 * hours / 8.0,
             *r as f64 / 1024.0,
             *rr as f64 / 1024.0
+        );
+    }
+    // Per eighth of the shift: the readings once a second of wall time.
+    println!("| log time (h) | RSS readings | median MB | max MB |");
+    let mut summary: Vec<(usize, f64, f64)> = Vec::new();
+    for (k, v) in samples.iter_mut().enumerate() {
+        if v.is_empty() {
+            continue;
+        }
+        v.sort_unstable();
+        let med = v[v.len() / 2] as f64 / 1024.0;
+        let max = v[v.len() - 1] as f64 / 1024.0;
+        println!(
+            "| {:.2}–{:.2} | {} | {med:.1} | {max:.1} |",
+            k as f64 * hours / 8.0,
+            (k + 1) as f64 * hours / 8.0,
+            v.len()
+        );
+        summary.push((k, med, max));
+    }
+    // The first hour (of 8) against the last.
+    if let (Some(a), Some(b)) = (summary.first(), summary.iter().rev().find(|x| x.0 <= 7)) {
+        println!(
+            "RSS growth from the eighth {:.2}–{:.2} h to {:.2}–{:.2} h: median {:+.1} %, max {:+.1} %",
+            a.0 as f64 * hours / 8.0,
+            (a.0 + 1) as f64 * hours / 8.0,
+            b.0 as f64 * hours / 8.0,
+            (b.0 + 1) as f64 * hours / 8.0,
+            100.0 * (b.1 / a.1 - 1.0),
+            100.0 * (b.2 / a.2 - 1.0)
         );
     }
     if let (Some(first), Some(last)) = (marks.first(), marks.last()) {

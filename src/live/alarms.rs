@@ -224,6 +224,41 @@ impl RuleState {
     }
 }
 
+/// What a cycle rule says when it is raised or cleared: the figures of
+/// the cycle that changed it.
+enum Said {
+    /// Cycles NOK in a row.
+    NokRun(usize),
+    /// The stroke residual (mm), its band and the cycles needed out of it.
+    Drift(f64, (f64, f64), usize),
+    /// The motor speed and the set-point (rpm).
+    Speed(f64, f64),
+}
+
+impl Said {
+    fn text(&self, raised: bool, cycle: u64) -> String {
+        match (self, raised) {
+            (Said::NokRun(run), true) => {
+                format!("{run} NOK cycles in a row (up to cycle {cycle})")
+            }
+            (Said::NokRun(_), false) => format!("cycle {cycle} OK again"),
+            (Said::Drift(x, (lo, hi), consecutive), true) => format!(
+                "stroke residual {x:.4} mm out of its band {lo:.4}–{hi:.4} mm for {consecutive} cycles (cycle {cycle}): joint wear?"
+            ),
+            (Said::Drift(..), false) => {
+                format!("stroke residual back in its band (cycle {cycle})")
+            }
+            (Said::Speed(rpm, sp), true) => format!(
+                "motor speed {rpm:.1} rpm is {:+.1} % off the set-point {sp:.0} rpm (cycle {cycle})",
+                100.0 * (rpm - sp) / sp
+            ),
+            (Said::Speed(..), false) => {
+                format!("motor speed back at the set-point (cycle {cycle})")
+            }
+        }
+    }
+}
+
 /// The rules' state over a shift (bounded: the last `last` connectors of a
 /// yield rule, the learning cycles of a drift rule).
 #[derive(Debug, Clone)]
@@ -278,29 +313,14 @@ impl Alarms {
     /// A new cycle.
     pub fn cycle(&mut self, c: &CycleInput, out: &mut Vec<AlarmEvent>) {
         for (r, st) in self.rules.rules.iter().zip(self.state.iter_mut()) {
-            match r {
+            let (on, said) = match r {
                 Rule::NokInARow { count } => {
                     match c.nok {
                         Some(true) => st.run += 1,
                         Some(false) => st.run = 0,
                         None => {}
                     }
-                    let on = st.run >= (*count).max(1);
-                    let run = st.run;
-                    Self::set(
-                        st,
-                        on,
-                        r.name(),
-                        || {
-                            if on {
-                                format!("{run} NOK cycles in a row (up to cycle {})", c.index)
-                            } else {
-                                format!("cycle {} OK again", c.index)
-                            }
-                        },
-                        Some(c),
-                        out,
-                    );
+                    (st.run >= (*count).max(1), Said::NokRun(st.run))
                 }
                 Rule::StrokeDrift {
                     learn,
@@ -326,23 +346,7 @@ impl Alarms {
                         continue;
                     };
                     let on = st.streak(x < lo || x > hi, *consecutive);
-                    Self::set(
-                        st,
-                        on,
-                        r.name(),
-                        || {
-                            if on {
-                                format!(
-                                    "stroke residual {x:.4} mm out of its band {lo:.4}–{hi:.4} mm for {} cycles (cycle {}): joint wear?",
-                                    consecutive, c.index
-                                )
-                            } else {
-                                format!("stroke residual back in its band (cycle {})", c.index)
-                            }
-                        },
-                        Some(c),
-                        out,
-                    );
+                    (on, Said::Drift(x, (lo, hi), *consecutive))
                 }
                 Rule::SpeedOff {
                     tolerance,
@@ -356,29 +360,11 @@ impl Alarms {
                         continue;
                     }
                     let off = (c.motor_rpm - sp).abs() / sp > *tolerance;
-                    let on = st.streak(off, *consecutive);
-                    let rpm = c.motor_rpm;
-                    Self::set(
-                        st,
-                        on,
-                        r.name(),
-                        || {
-                            if on {
-                                format!(
-                                    "motor speed {rpm:.1} rpm is {:+.1} % off the set-point {sp:.0} rpm (cycle {})",
-                                    100.0 * (rpm - sp) / sp,
-                                    c.index
-                                )
-                            } else {
-                                format!("motor speed back at the set-point (cycle {})", c.index)
-                            }
-                        },
-                        Some(c),
-                        out,
-                    );
+                    (st.streak(off, *consecutive), Said::Speed(c.motor_rpm, sp))
                 }
-                _ => {}
-            }
+                _ => continue,
+            };
+            Self::set(st, on, r.name(), || said.text(on, c.index), Some(c), out);
         }
     }
 
