@@ -309,6 +309,19 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
                 ));
                 if let Some(m) = marks.last() {
                     eprintln!("mark {m:?}");
+                    // The eighth just finished: median and maximum of its readings.
+                    let prev = &samples[(k as usize - 1).min(8)];
+                    let mut v = prev.clone();
+                    v.sort_unstable();
+                    if let (Some(mid), Some(max)) = (v.get(v.len() / 2), v.last()) {
+                        eprintln!(
+                            "eighth {}: {} readings, median {:.1} MB, max {:.1} MB",
+                            k - 1,
+                            v.len(),
+                            *mid as f64 / 1024.0,
+                            *max as f64 / 1024.0
+                        );
+                    }
                 }
             }
             // The archive job: finished logs and inspected images go
