@@ -47,8 +47,13 @@ impl PiControl {
     /// the fixed step of a non-adaptive run).
     pub(crate) fn propose(&self, err: f64, h: f64, fixed: Option<f64>) -> (f64, f64) {
         let fac11 = err.powf(self.expo1);
-        let fac = (fac11 / self.facold.powf(self.beta) / self.safe)
-            .clamp(1.0 / self.fac2, 1.0 / self.fac1);
+        // facold^0 is exactly 1: DOP853 skips the power (one per step).
+        let lund = if self.beta == 0.0 {
+            1.0
+        } else {
+            self.facold.powf(self.beta)
+        };
+        let fac = (fac11 / lund / self.safe).clamp(1.0 / self.fac2, 1.0 / self.fac1);
         (fac11, fixed.unwrap_or(h / fac))
     }
 
