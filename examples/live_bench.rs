@@ -34,7 +34,8 @@
 //! resident memory of the follower + TUI process (and of the rig's) at
 //! every eighth of the shift and the growth from the first mark to the last;
 //! and, read once a second, the median and maximum of each eighth and their
-//! growth from the first eighth to the last.
+//! growth from the first eighth to the last. With `LIVE_BENCH_EXIT_HOT=1`
+//! it exits without dropping anything, for a heap profiler's live set.
 
 use pinsight::live::sim::{FlushMark, SimOptions};
 use pinsight::live::{AlarmRules, LiveBatch};
@@ -337,7 +338,14 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
             archive_images(&images, &mut next_del, l.images.saturating_sub(100));
         },
     )?;
-    stop.store(true, Ordering::Relaxed);
+    // LIVE_BENCH_EXIT_HOT=1: the follower is left running and the process
+    // exits without dropping anything, so that a heap profiler
+    // (`heaptrack`) lists the whole live set of the end of the shift, by
+    // call stack, as "leaked".
+    let hot = std::env::var_os("LIVE_BENCH_EXIT_HOT").is_some();
+    if !hot {
+        stop.store(true, Ordering::Relaxed);
+    }
     let out = child.wait_with_output()?;
     let l = app.session.live.as_ref();
     println!(
@@ -400,6 +408,11 @@ fn shift(a: &[String]) -> anyhow::Result<()> {
             last.0 as f64 * hours / 8.0,
             100.0 * (last.2 as f64 / first.2 as f64 - 1.0)
         );
+    }
+    if hot {
+        use std::io::Write;
+        let _ = std::io::stdout().flush();
+        std::process::exit(0);
     }
     Ok(())
 }

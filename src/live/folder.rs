@@ -249,7 +249,20 @@ impl FolderTail {
             self.seen.remove(&p);
             self.watermark = Some(self.watermark.map_or(m, |w| w.max(m)));
         }
+        self.give_back_room();
         out
+    }
+
+    /// A burst of images (a catch-up after a stall, a camera's backlog)
+    /// grows the map of seen names past what the forgetting window holds
+    /// in steady running; a hash map keeps its largest table for good, so
+    /// once the burst is forgotten the room is given back (with a margin:
+    /// not at every scan).
+    fn give_back_room(&mut self) {
+        let len = self.seen.len().max(1024);
+        if self.seen.capacity() > 4 * len {
+            self.seen.shrink_to(2 * len);
+        }
     }
 
     /// Marks a file as seen (a log followed by name).
@@ -330,5 +343,34 @@ mod tests {
         assert_eq!(b.images.len(), 7, "{:?}", names(&b.images));
         assert!(!t.behind);
         assert_eq!(t.remembered(), 0, "all forgotten behind the watermark");
+    }
+
+    #[test]
+    fn a_burst_of_images_does_not_keep_its_room() {
+        // 10 000 images at once (a catch-up): remembered while handed out,
+        // forgotten behind the watermark in the same scan (all are older
+        // than FORGET_S); the map's table must not stay sized for them.
+        let d = tempfile::tempdir().unwrap();
+        let t0 = SystemTime::now() - Duration::from_secs(3 * 3600);
+        for i in 0..10_000u64 {
+            let f = File::create(d.path().join(format!("img-{i:05}.png"))).unwrap();
+            f.set_modified(t0 + Duration::from_secs(i)).unwrap();
+        }
+        let mut t = FolderTail::new(d.path());
+        assert_eq!(t.scan(None, 20_000).images.len(), 10_000);
+        assert_eq!(t.remembered(), 0);
+        assert!(
+            t.seen.capacity() < 4 * 1024,
+            "room kept: {}",
+            t.seen.capacity()
+        );
+        // A steady map (within the margin) is not shrunk at every scan.
+        for i in 0..900 {
+            t.seen
+                .insert(PathBuf::from(format!("x{i}")), SystemTime::now());
+        }
+        let cap = t.seen.capacity();
+        t.give_back_room();
+        assert_eq!(t.seen.capacity(), cap);
     }
 }
