@@ -260,9 +260,17 @@ impl FolderTail {
     /// not at every scan).
     fn give_back_room(&mut self) {
         let len = self.seen.len().max(1024);
-        if self.seen.capacity() > 4 * len {
-            self.seen.shrink_to(2 * len);
+        if self.seen.capacity() > 3 * len {
+            self.seen.shrink_to(len + len / 2);
         }
+    }
+
+    /// Forgets every name and the watermark (tests: a listing after the
+    /// forgetting window, on a folder whose files are all still there).
+    #[cfg(test)]
+    pub(crate) fn forget_all(&mut self) {
+        self.seen.clear();
+        self.watermark = None;
     }
 
     /// Marks a file as seen (a log followed by name).
@@ -372,5 +380,20 @@ mod tests {
         let cap = t.seen.capacity();
         t.give_back_room();
         assert_eq!(t.seen.capacity(), cap);
+        // A burst of twice the steady names, then back to the steady
+        // number (a shift's hour after a catch-up): the burst's table goes.
+        t.seen.clear();
+        for i in 0..60_000 {
+            t.seen
+                .insert(PathBuf::from(format!("y{i}")), SystemTime::now());
+        }
+        t.seen
+            .retain(|p, _| p.to_string_lossy()[1..].parse::<u32>().unwrap() % 2 == 0);
+        t.give_back_room();
+        assert!(
+            t.seen.capacity() <= 60_000,
+            "room kept: {}",
+            t.seen.capacity()
+        );
     }
 }

@@ -139,6 +139,10 @@ pub struct Follower {
     logs: Vec<LogFollow>,
     /// Logs finished and let go ([`Follower::retire`]), as the summary lists them.
     retired: Vec<FileEvent>,
+    /// The files of those logs still on disk, by path and identity: a
+    /// folder listing that finds one again (its name forgotten by the
+    /// folder's tail) must not follow it again from the start.
+    retired_files: Vec<(PathBuf, FileIdentity)>,
     folders: Vec<FolderFollow>,
     queue: VecDeque<ImageJob>,
     alarms: Alarms,
@@ -147,6 +151,28 @@ pub struct Follower {
     t0: Option<i64>,
     counts: LiveSummary,
     last_rescan: Instant,
+}
+
+/// What tells a file from another of the same name (a rig that reuses
+/// a name writes a new file): its inode and length where there are inodes,
+/// else its length and modification time.
+type FileIdentity = (u64, u64);
+
+fn file_identity(p: &Path) -> Option<FileIdentity> {
+    let md = std::fs::metadata(p).ok()?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((md.ino(), md.len()))
+    }
+    #[cfg(not(unix))]
+    {
+        let m = md.modified().ok()?;
+        let ns = m
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        Some((ns, md.len()))
+    }
 }
 
 fn cycle_of_name(p: &Path) -> Option<u64> {
@@ -165,6 +191,7 @@ impl Follower {
         let mut f = Follower {
             logs: Vec::new(),
             retired: Vec::new(),
+            retired_files: Vec::new(),
             folders: Vec::new(),
             queue: VecDeque::new(),
             alarms,
@@ -237,7 +264,12 @@ impl Follower {
     }
 
     fn add_log(&mut self, p: &Path) {
-        if self.logs.iter().any(|l| l.tail.path == p) {
+        if self.logs.iter().any(|l| l.tail.path == p)
+            || self
+                .retired_files
+                .iter()
+                .any(|(r, id)| r == p && file_identity(p).as_ref() == Some(id))
+        {
             return;
         }
         let name = p.display().to_string();
@@ -660,6 +692,15 @@ impl Follower {
             std::mem::take(&mut self.logs).into_iter().partition(done);
         self.logs = keep;
         self.retired.extend(gone.iter().map(LogFollow::file_event));
+        if !gone.is_empty() {
+            // A file deleted since (an archive job) cannot be found again.
+            self.retired_files.retain(|(p, _)| p.exists());
+        }
+        for l in &gone {
+            if let Some(id) = file_identity(&l.tail.path) {
+                self.retired_files.push((l.tail.path.clone(), id));
+            }
+        }
     }
 
     /// Inspects the queued images (in parallel, reported in order), at

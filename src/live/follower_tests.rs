@@ -55,3 +55,56 @@ fn rotated_logs_once_finished_are_let_go_but_still_listed() {
         "at most the finishing and the new file: {most_logs}"
     );
 }
+
+#[test]
+fn a_finished_log_found_again_in_its_folder_is_not_followed_again() {
+    // A folder of a rig's rotated logs, all still on disk (no archive job).
+    // Once the folder's tail has forgotten their names (its window is
+    // 120 s; forgotten at once here), a whole listing finds the finished
+    // logs again: they must not be read again from the start (their cycles
+    // would count twice).
+    let d = tempfile::tempdir().unwrap();
+    let opts = crate::live::sim::SimOptions {
+        out: d.path().join("run.mcap"),
+        rpm: 1500.0,
+        rate: 8.0,
+        duration_s: 6.0,
+        rotate_s: Some(2.0),
+        spindle_hz: 1000.0,
+        force_hz: 2000.0,
+        displacement_hz: 2000.0,
+        ..Default::default()
+    };
+    let mut f = Follower::new(FollowInputs {
+        paths: vec![d.path().to_path_buf()],
+        ..Default::default()
+    });
+    let rig =
+        std::thread::spawn(move || crate::live::sim::run(&opts, &AtomicBool::new(false)).unwrap());
+    while !rig.is_finished() {
+        f.poll(None);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let report = rig.join().unwrap();
+    for _ in 0..100 {
+        f.poll(None);
+        if f.all_finished() && !f.behind() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(f.all_finished());
+    assert!(report.files.len() >= 3, "{:?}", report.files);
+    let before = f.summary();
+    assert!(before.cycles > 0);
+    assert_eq!(before.logs.len(), report.files.len());
+    for d in &mut f.folders {
+        d.tail.forget_all();
+    }
+    for _ in 0..5 {
+        f.poll(None);
+    }
+    let after = f.summary();
+    assert_eq!(after.cycles, before.cycles, "cycles counted again");
+    assert_eq!(after.logs.len(), before.logs.len(), "{:?}", after.logs);
+}
