@@ -83,15 +83,10 @@ impl<const N: usize> Dop853<N> {
         // them, the accepted one stays for the dense output.
         let k = &mut self.k;
         k[0] = self.pos.f;
-        let mut h = self.next.size(
-            &self.cfg,
-            &self.cfg.tol,
-            sys,
-            &self.pos,
-            8,
-            h_max,
-            &mut self.stats,
-        );
+        let (cfg, pos) = (&self.cfg, &self.pos);
+        let mut h = self
+            .next
+            .size(cfg, &cfg.tol, sys, pos, 8, h_max, &mut self.stats);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
             h = h_try;

@@ -84,15 +84,10 @@ impl<const N: usize> Dopri5<N> {
         let h_max = h_max.min(self.cfg.h_max);
         let ncon = self.cfg.tol.n_controlled();
         let (t, y, k1) = (self.pos.t, self.pos.y, self.pos.f);
-        let mut h = self.next.size(
-            &self.cfg,
-            &self.cfg.tol,
-            sys,
-            &self.pos,
-            5,
-            h_max,
-            &mut self.stats,
-        );
+        let (cfg, pos) = (&self.cfg, &self.pos);
+        let mut h = self
+            .next
+            .size(cfg, &cfg.tol, sys, pos, 5, h_max, &mut self.stats);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
             h = h_try;

@@ -248,15 +248,10 @@ impl<const N: usize> Radau5<N> {
         let h_max = h_max.min(self.cfg.h_max);
         let ncon = self.tol.n_controlled();
         let (t, y, f0) = (self.pos.t, self.pos.y, self.pos.f);
-        let mut h = self.next.size(
-            &self.cfg,
-            &self.tol,
-            sys,
-            &self.pos,
-            3,
-            h_max,
-            &mut self.stats,
-        );
+        let (cfg, pos) = (&self.cfg, &self.pos);
+        let mut h = self
+            .next
+            .size(cfg, &self.tol, sys, pos, 3, h_max, &mut self.stats);
         let mut newton_fails = 0u32;
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
