@@ -77,6 +77,59 @@ pub(crate) struct RodAndBar {
     pub m12: f64,
 }
 
+/// The ideal mechanism at the same crank state as a joint evaluation
+/// (NaN when the quadratures do not run), and the quadratures' integrands:
+/// the stroke deviation and the squared torque difference.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Beside {
+    pub s: f64,
+    pub v: f64,
+    pub a: f64,
+    pub m12: f64,
+    pub process_force: f64,
+    pub q_s: f64,
+    pub q_dm2: f64,
+}
+
+/// The outputs of a joint evaluation: the crank's (θ2, ω2, α2, motor
+/// torque), the joint, the rod and pin bar with the final α3 and M12, and
+/// the ideal mechanism beside them. One place for the constant-speed and
+/// the motor level alike.
+#[inline(always)]
+pub(crate) fn joint_outputs(
+    t: f64,
+    (theta2, omega2, alpha2, motor_torque): (f64, f64, f64, f64),
+    joint: &Joint,
+    rb: &RodAndBar,
+    v4: f64,
+    ideal: &Beside,
+) -> Outputs {
+    Outputs {
+        t,
+        theta2,
+        omega2,
+        alpha2,
+        motor_torque,
+        s: rb.s,
+        v4,
+        a4: rb.a4,
+        alpha3: rb.alpha3,
+        f_n: joint.f_n,
+        f_t: joint.f_t,
+        v_slip: joint.v_t,
+        m12: rb.m12,
+        delta: joint.delta,
+        delta_dot: joint.delta_dot,
+        ecc: joint.ecc,
+        process_force: rb.f_proc,
+        ideal_s: ideal.s,
+        ideal_v: ideal.v,
+        ideal_a: ideal.a,
+        ideal_m12: ideal.m12,
+        ideal_process_force: ideal.process_force,
+    }
+}
+
 /// The clearance-joint model with its constants resolved.
 #[derive(Debug, Clone)]
 pub struct ClearanceModel {
@@ -372,6 +425,44 @@ impl ClearanceModel {
         }
     }
 
+    /// The ideal mechanism at (θ2, ω2, α2) beside the joint's stroke `s`
+    /// and torque `m12`, when the quadratures run (see [`Beside`]).
+    #[inline(always)]
+    pub(crate) fn beside_ideal(
+        &self,
+        theta2: f64,
+        (s2, c2): (f64, f64),
+        w: f64,
+        alpha2: f64,
+        s: f64,
+        m12: f64,
+    ) -> Beside {
+        if self.quadratures {
+            let id = self.ideal.at_sc(theta2, s2, c2, w, alpha2);
+            let ideal_s = id.pose.x4 - self.x4_tdc;
+            let dm = m12 - id.m12;
+            Beside {
+                s: ideal_s,
+                v: id.pose.v4,
+                a: id.pose.a4,
+                m12: id.m12,
+                process_force: id.process_force,
+                q_s: s - ideal_s,
+                q_dm2: dm * dm,
+            }
+        } else {
+            Beside {
+                s: f64::NAN,
+                v: f64::NAN,
+                a: f64::NAN,
+                m12: f64::NAN,
+                process_force: f64::NAN,
+                q_s: 0.0,
+                q_dm2: 0.0,
+            }
+        }
+    }
+
     /// The full evaluation in a given mode. Inlined into the right-hand side,
     /// where the outputs it does not need are then never computed.
     #[inline(always)]
@@ -387,64 +478,16 @@ impl ClearanceModel {
         let va = [-r * w * s2, r * w * c2];
         let aa = [-r * w * w * c2, -r * w * w * s2];
         let joint = self.joint(mode, a, va, s3, c3, omega3, x4, v4);
-        let Joint {
-            ecc,
-            delta,
-            delta_dot,
-            f_n,
-            f_t,
-            v_t,
-            ..
-        } = joint;
-        let RodAndBar {
-            alpha3,
-            s,
-            f_proc,
-            a4,
-            m12,
-            ..
-        } = self.rod_and_bar(mode, &joint, a, aa, (s2, c2), (s3, c3), omega3, x4, v4);
+        let rb = self.rod_and_bar(mode, &joint, a, aa, (s2, c2), (s3, c3), omega3, x4, v4);
         dy[THETA3] = omega3;
-        dy[OMEGA3] = alpha3;
+        dy[OMEGA3] = rb.alpha3;
         dy[X4] = v4;
-        dy[V4] = a4;
+        dy[V4] = rb.a4;
         // The ideal mechanism at the same angle.
-        let (ideal_s, ideal_v, ideal_a, ideal_m12, ideal_pf) = if self.quadratures {
-            let id = self.ideal.at_sc(theta2, s2, c2, w, 0.0);
-            let ideal_s = id.pose.x4 - self.x4_tdc;
-            dy[Q_S] = s - ideal_s;
-            let dm = m12 - id.m12;
-            dy[Q_DM2] = dm * dm;
-            (ideal_s, id.pose.v4, id.pose.a4, id.m12, id.process_force)
-        } else {
-            dy[Q_S] = 0.0;
-            dy[Q_DM2] = 0.0;
-            (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
-        };
-        Outputs {
-            t,
-            theta2,
-            omega2: w,
-            alpha2: 0.0,
-            motor_torque: f64::NAN,
-            s,
-            v4,
-            a4,
-            alpha3,
-            f_n,
-            f_t,
-            v_slip: v_t,
-            m12,
-            delta,
-            delta_dot,
-            ecc,
-            process_force: f_proc,
-            ideal_s,
-            ideal_v,
-            ideal_a,
-            ideal_m12,
-            ideal_process_force: ideal_pf,
-        }
+        let ideal = self.beside_ideal(theta2, (s2, c2), w, 0.0, rb.s, rb.m12);
+        dy[Q_S] = ideal.q_s;
+        dy[Q_DM2] = ideal.q_dm2;
+        joint_outputs(t, (theta2, w, 0.0, f64::NAN), &joint, &rb, v4, &ideal)
     }
 
     pub fn outputs(&self, t: f64, y: &[f64; DIM]) -> Outputs {

@@ -19,7 +19,7 @@
 //! drive's part (model/motor.rs).
 
 use super::clearance::{
-    ClearanceModel, Joint, Mode, OMEGA3, Outputs, Q_DM2, Q_S, RodAndBar, THETA3, V4, X4,
+    ClearanceModel, Mode, OMEGA3, Outputs, Q_DM2, Q_S, RodAndBar, THETA3, V4, X4, joint_outputs,
     stick_event, stick_switch,
 };
 use super::contact::ProcessMode;
@@ -77,24 +77,8 @@ impl MotorClearanceModel {
         let aa0 = [-r * w * w * c2, -r * w * w * s2];
         let e2 = [-r * s2, r * c2];
         let joint = m.joint(mode, a, va, s3, c3, omega3, x4, v4);
-        let Joint {
-            ecc,
-            delta,
-            delta_dot,
-            f_n,
-            f_t,
-            v_t,
-            ..
-        } = joint;
         // Rod, pin bar and M12 without α2: α3 = α3⁰ + k3 α2, M12 = M12⁰ + S α2.
-        let RodAndBar {
-            alpha3: alpha3_0,
-            s,
-            f_guide,
-            f_proc,
-            a4,
-            m12: m12_0,
-        } = m.rod_and_bar(mode, &joint, a, aa0, (s2, c2), (s3, c3), omega3, x4, v4);
+        let rb0 = m.rod_and_bar(mode, &joint, a, aa0, (s2, c2), (s3, c3), omega3, x4, v4);
         let u3 = [c3, s3];
         let k3 = -m3 * lc3 * cross(u3, e2) * m.inv_j_a;
         let da_g3 = [e2[0] - lc3 * k3 * s3, e2[1] + lc3 * k3 * c3];
@@ -102,13 +86,16 @@ impl MotorClearanceModel {
         // The crank's balance.
         let (t_motor, di) = self.drive.torque(w, y[BASE + D_PI]);
         let m_drive = self.drive.at_crank(t_motor);
-        let alpha2 = (m_drive - m12_0) / (self.drive.inertia + s_inertia);
-        let alpha3 = alpha3_0 + k3 * alpha2;
-        let m12 = m12_0 + s_inertia * alpha2;
+        let alpha2 = (m_drive - rb0.m12) / (self.drive.inertia + s_inertia);
+        let rb = RodAndBar {
+            alpha3: rb0.alpha3 + k3 * alpha2,
+            m12: rb0.m12 + s_inertia * alpha2,
+            ..rb0
+        };
         dy[THETA3] = omega3;
-        dy[OMEGA3] = alpha3;
+        dy[OMEGA3] = rb.alpha3;
         dy[X4] = v4;
-        dy[V4] = a4;
+        dy[V4] = rb.a4;
         drive_derivatives(
             dy,
             BASE,
@@ -120,45 +107,17 @@ impl MotorClearanceModel {
             t_motor,
             m_drive,
             di,
-            (-f_guide * v4, -f_proc * v4, f_n * delta_dot - f_t * v_t),
+            (
+                -rb.f_guide * v4,
+                -rb.f_proc * v4,
+                joint.f_n * joint.delta_dot - joint.f_t * joint.v_t,
+            ),
         );
         // The ideal mechanism at the same angle, speed and acceleration.
-        let (ideal_s, ideal_v, ideal_a, ideal_m12, ideal_pf) = if m.quadratures {
-            let id = m.ideal.at_sc(theta2, s2, c2, w, alpha2);
-            let ideal_s = id.pose.x4 - m.x4_tdc;
-            dy[Q_S] = s - ideal_s;
-            let dm = m12 - id.m12;
-            dy[Q_DM2] = dm * dm;
-            (ideal_s, id.pose.v4, id.pose.a4, id.m12, id.process_force)
-        } else {
-            dy[Q_S] = 0.0;
-            dy[Q_DM2] = 0.0;
-            (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN)
-        };
-        Outputs {
-            t,
-            theta2,
-            omega2: w,
-            alpha2,
-            motor_torque: t_motor,
-            s,
-            v4,
-            a4,
-            alpha3,
-            f_n,
-            f_t,
-            v_slip: v_t,
-            m12,
-            delta,
-            delta_dot,
-            ecc,
-            process_force: f_proc,
-            ideal_s,
-            ideal_v,
-            ideal_a,
-            ideal_m12,
-            ideal_process_force: ideal_pf,
-        }
+        let ideal = m.beside_ideal(theta2, (s2, c2), w, alpha2, rb.s, rb.m12);
+        dy[Q_S] = ideal.q_s;
+        dy[Q_DM2] = ideal.q_dm2;
+        joint_outputs(t, (theta2, w, alpha2, t_motor), &joint, &rb, v4, &ideal)
     }
 }
 

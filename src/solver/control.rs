@@ -136,31 +136,70 @@ impl<const N: usize> Position<N> {
     }
 }
 
-/// The step a run starts with: the configured one (always for a fixed
-/// step), else Hairer's estimate for a method of order `order`. `at` is the
-/// starting point (t, y, f(t, y)); the estimate's evaluation is counted.
-pub(crate) fn first_step<const N: usize, S: System<N>>(
-    cfg: &StepperConfig<N>,
-    tol: &Tolerance<N>,
-    sys: &S,
-    at: (f64, &[f64; N], &[f64; N]),
-    order: u32,
-    h_max: f64,
-    stats: &mut Stats,
-) -> f64 {
-    if cfg.h > 0.0 || cfg.fixed {
-        cfg.h
-    } else {
-        initial_step(
-            sys,
-            at.0,
-            at.1,
-            at.2,
-            tol,
-            order,
-            h_max,
-            &mut stats.rhs_evals,
-        )
+/// The size of the next step, and whether it must first be estimated
+/// (after a start, or a restart that asks for it or has no size to go on).
+/// The adaptive steppers keep it alike: the accepted step's controller
+/// sets `h`, a restart keeps it as a hint, and the first step of a run is
+/// the configured one or Hairer's estimate.
+#[derive(Debug, Clone, Copy)]
+pub struct NextStep {
+    pub h: f64,
+    pub(crate) fresh: bool,
+}
+
+impl NextStep {
+    /// Before a run: `h` (the configured step, 0 for none) is estimated
+    /// afresh unless `fresh` is false (a fixed-step method).
+    pub(crate) fn new(h: f64, fresh: bool) -> Self {
+        NextStep { h, fresh }
+    }
+
+    /// A restart keeps the last size as a hint unless `fresh_step` asks for
+    /// a new estimate or there is none.
+    pub(crate) fn restart(&mut self, fresh_step: bool) {
+        if fresh_step || !(self.h > 0.0) {
+            self.fresh = true;
+        }
+    }
+
+    /// The caller's proposal replaces the estimate.
+    pub(crate) fn propose(&mut self, h: f64) {
+        self.h = h;
+        self.fresh = false;
+    }
+
+    /// The step to try from `at`, at most `h_max`: estimated first when
+    /// fresh (the configured step, always for a fixed step, else Hairer's
+    /// estimate for a method of order `order`; its evaluation counted).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn size<const N: usize, S: System<N>>(
+        &mut self,
+        cfg: &StepperConfig<N>,
+        tol: &Tolerance<N>,
+        sys: &S,
+        at: &Position<N>,
+        order: u32,
+        h_max: f64,
+        stats: &mut Stats,
+    ) -> f64 {
+        if self.fresh {
+            self.h = if cfg.h > 0.0 || cfg.fixed {
+                cfg.h
+            } else {
+                initial_step(
+                    sys,
+                    at.t,
+                    &at.y,
+                    &at.f,
+                    tol,
+                    order,
+                    h_max,
+                    &mut stats.rhs_evals,
+                )
+            };
+            self.fresh = false;
+        }
+        self.h.min(h_max)
     }
 }
 

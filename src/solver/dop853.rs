@@ -5,8 +5,8 @@
 //! ([`Dop853::prepare_dense`]), so steps that need no interpolation cost 12
 //! evaluations, not 15.
 
+use super::control::{NextStep, StiffnessMonitor, derivative_at_end, trial_step};
 use super::control::{PiControl, Position};
-use super::control::{StiffnessMonitor, derivative_at_end, first_step, trial_step};
 use super::dop853_coef::*;
 use super::{Stats, StepError, StepperConfig, System, all_finite};
 
@@ -21,10 +21,9 @@ pub struct Dop853<const N: usize> {
     pub pos: Position<N>,
     /// Stages k1..k16 of the last accepted step (k13 = f(t, y)).
     k: [[f64; N]; 16],
-    pub h: f64,
+    pub next: NextStep,
     h_used: f64,
     ctl: PiControl,
-    pub(crate) fresh: bool,
     dense_ready: bool,
     rcont: [[f64; N]; 8],
     stiffness: StiffnessMonitor,
@@ -56,10 +55,9 @@ impl<const N: usize> Dop853<N> {
             cfg,
             pos: Position::new(),
             k: [[0.0; N]; 16],
-            h: cfg.h,
+            next: NextStep::new(cfg.h, true),
             h_used: 0.0,
             ctl: CONTROL,
-            fresh: true,
             dense_ready: true,
             rcont: [[0.0; N]; 8],
             stiffness: StiffnessMonitor::default(),
@@ -70,9 +68,7 @@ impl<const N: usize> Dop853<N> {
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
         self.pos.restart(sys, t, y, &mut self.stats);
         self.ctl.restart();
-        if fresh_step || !(self.h > 0.0) {
-            self.fresh = true;
-        }
+        self.next.restart(fresh_step);
         self.h_used = 0.0;
         self.dense_ready = true;
         self.rcont = [[0.0; N]; 8];
@@ -81,18 +77,16 @@ impl<const N: usize> Dop853<N> {
 
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
-        if self.fresh {
-            let at = (self.pos.t, &self.pos.y, &self.pos.f);
-            self.h = first_step(&self.cfg, &self.cfg.tol, sys, at, 8, h_max, &mut self.stats);
-            self.fresh = false;
-        }
         let ncon = self.cfg.tol.n_controlled() as f64;
         let (t, y) = (self.pos.t, self.pos.y);
         // The stages are computed in place: a rejected try overwrites
         // them, the accepted one stays for the dense output.
         let k = &mut self.k;
         k[0] = self.pos.f;
-        let mut h = self.h.min(h_max);
+        let (cfg, pos) = (&self.cfg, &self.pos);
+        let mut h = self
+            .next
+            .size(cfg, &cfg.tol, sys, pos, 8, h_max, &mut self.stats);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
             h = h_try;
@@ -183,7 +177,7 @@ impl<const N: usize> Dop853<N> {
                 let hnew = self.ctl.accept(err, h, hnew);
                 self.pos.advance((t, y), tph, ynew, fnew);
                 self.h_used = h;
-                self.h = hnew.min(self.cfg.h_max);
+                self.next.h = hnew.min(self.cfg.h_max);
                 self.dense_ready = false;
                 return Ok(());
             }

@@ -2,8 +2,8 @@
 //! (Lund stabilisation, β = 0.04), stiffness detection, and the 4th-order
 //! continuous extension.
 
+use super::control::{NextStep, StiffnessMonitor, trial_step};
 use super::control::{PiControl, Position};
-use super::control::{StiffnessMonitor, first_step, trial_step};
 use super::{Stats, StepError, StepperConfig, System, all_finite, wrms};
 
 const C2: f64 = 0.2;
@@ -53,9 +53,8 @@ const STIFF_BOUNDARY: f64 = 3.25;
 pub struct Dopri5<const N: usize> {
     pub(crate) cfg: StepperConfig<N>,
     pub pos: Position<N>,
-    pub h: f64,
+    pub next: NextStep,
     ctl: PiControl,
-    pub(crate) fresh: bool,
     rcont: [[f64; N]; 5],
     stiffness: StiffnessMonitor,
     pub stats: Stats,
@@ -66,9 +65,8 @@ impl<const N: usize> Dopri5<N> {
         Self {
             cfg,
             pos: Position::new(),
-            h: cfg.h,
+            next: NextStep::new(cfg.h, true),
             ctl: CONTROL,
-            fresh: true,
             rcont: [[0.0; N]; 5],
             stiffness: StiffnessMonitor::default(),
             stats: Stats::default(),
@@ -78,22 +76,18 @@ impl<const N: usize> Dopri5<N> {
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], fresh_step: bool) {
         self.pos.restart(sys, t, y, &mut self.stats);
         self.ctl.restart();
-        if fresh_step || !(self.h > 0.0) {
-            self.fresh = true;
-        }
+        self.next.restart(fresh_step);
         self.rcont = [y, [0.0; N], [0.0; N], [0.0; N], [0.0; N]];
     }
 
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
-        if self.fresh {
-            let at = (self.pos.t, &self.pos.y, &self.pos.f);
-            self.h = first_step(&self.cfg, &self.cfg.tol, sys, at, 5, h_max, &mut self.stats);
-            self.fresh = false;
-        }
         let ncon = self.cfg.tol.n_controlled();
         let (t, y, k1) = (self.pos.t, self.pos.y, self.pos.f);
-        let mut h = self.h.min(h_max);
+        let (cfg, pos) = (&self.cfg, &self.pos);
+        let mut h = self
+            .next
+            .size(cfg, &cfg.tol, sys, pos, 5, h_max, &mut self.stats);
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
             h = h_try;
@@ -189,7 +183,7 @@ impl<const N: usize> Dopri5<N> {
                 self.rcont = r;
                 let hnew = self.ctl.accept(err, h, hnew);
                 self.pos.advance((t, y), tph, y1, k7);
-                self.h = hnew.min(self.cfg.h_max);
+                self.next.h = hnew.min(self.cfg.h_max);
                 return Ok(());
             }
             self.stats.rejected += 1;

@@ -271,7 +271,7 @@ impl<const N: usize> Stepper<N> {
     /// automatic initial-step estimate). Ignored by fixed-step runs.
     pub fn set_next_step(&mut self, h: f64) {
         if h > 0.0 && h.is_finite() {
-            dispatch!(self, s => if !s.cfg.fixed { s.h = h; s.fresh = false; })
+            dispatch!(self, s => if !s.cfg.fixed { s.next.propose(h) })
         }
     }
 
@@ -313,7 +313,7 @@ impl<const N: usize> Stepper<N> {
 
     /// Step size proposed for the next step.
     pub fn h_next(&self) -> f64 {
-        dispatch!(self, s => s.h)
+        dispatch!(self, s => s.next.h)
     }
 }
 

@@ -10,7 +10,7 @@
 //! iterates.
 
 use super::control::Position;
-use super::control::{derivative_at_end, first_step, trial_step};
+use super::control::{NextStep, derivative_at_end, trial_step};
 use super::{Scale, Stats, StepError, StepperConfig, System, Tolerance, all_finite, wrms};
 
 const SQ6: f64 = 2.449_489_742_783_178;
@@ -124,7 +124,7 @@ pub struct Radau5<const N: usize> {
     pub pos: Position<N>,
     /// Stage increments of the last accepted step (dense output).
     z: [[f64; N]; 3],
-    pub h: f64,
+    pub next: NextStep,
     h_used: f64,
     jac: Vec<f64>,
     jac_fresh: bool,
@@ -138,7 +138,6 @@ pub struct Radau5<const N: usize> {
     hacc: f64,
     erracc: f64,
     faccon: f64,
-    pub(crate) fresh: bool,
     pub stats: Stats,
 }
 
@@ -158,7 +157,7 @@ impl<const N: usize> Radau5<N> {
             fnewt,
             pos: Position::new(),
             z: [[0.0; N]; 3],
-            h: cfg.h,
+            next: NextStep::new(cfg.h, true),
             h_used: 0.0,
             jac: vec![0.0; N * N],
             jac_fresh: false,
@@ -172,7 +171,6 @@ impl<const N: usize> Radau5<N> {
             hacc: 0.0,
             erracc: 1e-2,
             faccon: 1.0,
-            fresh: true,
             stats: Stats::default(),
         }
     }
@@ -187,9 +185,7 @@ impl<const N: usize> Radau5<N> {
         self.first = true;
         self.rejected_last = false;
         self.faccon = 1.0;
-        if fresh_step || !(self.h > 0.0) {
-            self.fresh = true;
-        }
+        self.next.restart(fresh_step);
     }
 
     fn compute_jacobian<S: System<N>>(&mut self, sys: &S) {
@@ -250,14 +246,12 @@ impl<const N: usize> Radau5<N> {
 
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
         let h_max = h_max.min(self.cfg.h_max);
-        if self.fresh {
-            let at = (self.pos.t, &self.pos.y, &self.pos.f);
-            self.h = first_step(&self.cfg, &self.tol, sys, at, 3, h_max, &mut self.stats);
-            self.fresh = false;
-        }
         let ncon = self.tol.n_controlled();
         let (t, y, f0) = (self.pos.t, self.pos.y, self.pos.f);
-        let mut h = self.h.min(h_max);
+        let (cfg, pos) = (&self.cfg, &self.pos);
+        let mut h = self
+            .next
+            .size(cfg, &self.tol, sys, pos, 3, h_max, &mut self.stats);
         let mut newton_fails = 0u32;
         loop {
             let (h_try, last) = trial_step(&self.stats, self.cfg.max_steps, t, h, t_end)?;
@@ -447,7 +441,7 @@ impl<const N: usize> Radau5<N> {
                 if self.jac_valid && (1.0..=1.2).contains(&ratio) && !self.cfg.fixed {
                     hnew = h;
                 }
-                self.h = hnew.min(self.cfg.h_max);
+                self.next.h = hnew.min(self.cfg.h_max);
                 return Ok(());
             }
             self.rejected_last = true;

@@ -5,8 +5,8 @@
 //! only to land on `t_end`, on an event, or under `h_max`). A non-finite
 //! state is reported as a failure — that is how an unstable step shows.
 
-use super::control::Position;
 use super::control::check_budget;
+use super::control::{NextStep, Position};
 use super::{Stats, StepError, StepperConfig, System, all_finite};
 
 #[derive(Debug, Clone)]
@@ -14,9 +14,9 @@ pub struct Rk4<const N: usize> {
     pub(crate) cfg: StepperConfig<N>,
     pub pos: Position<N>,
     pub(crate) f_prev: [f64; N],
-    pub h: f64,
+    /// The configured step (never estimated).
+    pub next: NextStep,
     pub stats: Stats,
-    pub(crate) fresh: bool,
 }
 
 impl<const N: usize> Rk4<N> {
@@ -25,16 +25,15 @@ impl<const N: usize> Rk4<N> {
             cfg,
             pos: Position::new(),
             f_prev: [0.0; N],
-            h: cfg.h,
+            next: NextStep::new(cfg.h, false),
             stats: Stats::default(),
-            fresh: false,
         }
     }
 
     pub fn reset<S: System<N>>(&mut self, sys: &S, t: f64, y: [f64; N], _fresh: bool) {
         self.pos.restart(sys, t, y, &mut self.stats);
         self.f_prev = self.pos.f;
-        self.h = self.cfg.h;
+        self.next.h = self.cfg.h;
     }
 
     pub fn step<S: System<N>>(&mut self, sys: &S, t_end: f64, h_max: f64) -> Result<(), StepError> {
