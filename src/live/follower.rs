@@ -151,6 +151,8 @@ pub struct Follower {
     t0: Option<i64>,
     counts: LiveSummary,
     last_rescan: Instant,
+    /// When the allocator last gave free room back (once a minute).
+    last_trim: Instant,
 }
 
 /// What tells a file from another of the same name (a rig that reuses
@@ -187,6 +189,7 @@ fn cycle_of_name(p: &Path) -> Option<u64> {
 
 impl Follower {
     pub fn new(inputs: FollowInputs) -> Self {
+        super::allocator::settle_for_a_shift();
         let alarms = Alarms::new(inputs.alarms.clone());
         let mut f = Follower {
             logs: Vec::new(),
@@ -210,6 +213,7 @@ impl Follower {
                 yields: None,
             },
             last_rescan: Instant::now(),
+            last_trim: Instant::now(),
             inputs,
         };
         for p in f.inputs.paths.clone() {
@@ -350,6 +354,10 @@ impl Follower {
         let rescan = changed.is_none() || self.last_rescan.elapsed().as_secs() >= 30;
         if rescan {
             self.last_rescan = Instant::now();
+        }
+        if self.last_trim.elapsed().as_secs() >= 60 {
+            self.last_trim = Instant::now();
+            super::allocator::give_back_free_room();
         }
         // Folders: new images and new logs.
         let mut new_logs = Vec::new();

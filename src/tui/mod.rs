@@ -216,6 +216,8 @@ pub fn start_follow(
     std::sync::mpsc::Receiver<crate::live::LiveBatch>,
     crate::live::AlarmRules,
 )> {
+    // Before the follower's thread exists, so its arena is one of the two.
+    crate::live::allocator::settle_for_a_shift();
     session.start_live(
         inputs.config.clone(),
         inputs
