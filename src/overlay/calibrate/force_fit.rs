@@ -194,25 +194,17 @@ impl ForceSearch<'_> {
             self.p,
             (nominal_so, 200e-6),
             (2.0, 200e-6),
-            FORCE_ITERS_WIDE,
         )
     }
 
     /// Around a fit (standoff, τ): ±0.3 mm, ±60 µs.
     pub fn narrow(&self, cycles: &[&ForceCycle], around: (f64, f64)) -> (f64, f64, Vec<f64>) {
-        fit_force(
-            cycles,
-            self.knots,
-            self.fixed,
-            self.p,
-            around,
-            (0.3, 60e-6),
-            FORCE_ITERS_NARROW,
-        )
+        fit_force(cycles, self.knots, self.fixed, self.p, around, (0.3, 60e-6))
     }
 }
 
-/// Standoff and τ minimising the force objective (nested golden sections).
+/// Standoff and τ minimising the force objective (nested Brent searches:
+/// the best standoff for each τ inside, τ outside).
 pub(super) fn fit_force(
     cycles: &[&ForceCycle],
     knots: &[f64],
@@ -220,19 +212,21 @@ pub(super) fn fit_force(
     p: &Params,
     around: (f64, f64),
     spans: (f64, f64),
-    iters: usize,
 ) -> (f64, f64, Vec<f64>) {
+    use crate::solver::roots::brent_min;
     let (s0, t0) = around;
     let inner = |tau: f64| {
-        let so = golden(s0 - spans.0, s0 + spans.0, iters, |so| {
+        let (so, ss, _) = brent_min(s0 - spans.0, s0 + spans.0, FORCE_TOL_STANDOFF_MM, |so| {
             force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0
         });
-        (
-            so,
-            force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0,
-        )
+        (so, ss)
     };
-    let tau = golden((t0 - spans.1).max(0.0), t0 + spans.1, iters, |t| inner(t).1);
+    let (tau, _, _) = brent_min(
+        (t0 - spans.1).max(0.0),
+        t0 + spans.1,
+        FORCE_TOL_TAU_S,
+        |t| inner(t).1,
+    );
     let (so, _) = inner(tau);
     let (_, vals, _) = force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1);
     (so, tau, vals)

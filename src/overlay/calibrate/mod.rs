@@ -41,14 +41,15 @@
 //!      (predictions at the nominal standoff read 3–11 % low on logs whose
 //!      standoff was 0.1–0.3 mm short).
 //!    - Cost: the ensembles run at rtol 1e-4 (statistics, not trajectories;
-//!      [`ENSEMBLE_RTOL`]) and the force fit's golden sections stop at a
-//!      fiftieth of the estimates' σ ([`FORCE_ITERS_WIDE`]).
+//!      [`ENSEMBLE_RTOL`]) and the force fit's searches (Brent's method)
+//!      stop far under a fiftieth of the estimates' σ
+//!      ([`FORCE_TOL_STANDOFF_MM`]).
 //! 2. Standoff, F_ins table and the load cell's lag — from the force against
 //!    the (phase-corrected) measured stroke: the load cell reads
 //!    Lag_τ[F_ins(s − standoff)·c_d(v)] on the way down (and the fixed
 //!    F_wd on the way up). For a given (standoff, τ) the table values at the
 //!    nominal table's depths enter linearly (solved by least squares);
-//!    standoff and τ by golden-section searches.
+//!    standoff and τ by nested Brent searches.
 //! 3. Uncertainties. The clearance (and Δz, ψ): σ² = σ_log² + σ_model²,
 //!    where σ_log, the sampling spread of an ensemble of k measured cycles,
 //!    is the larger of (a) a parametric bootstrap — the interior fine

@@ -340,17 +340,18 @@ pub(super) fn fit_clearance(
     w: Option<&Weights>,
 ) -> (f64, f64, f64) {
     let obj = |c: f64| stroke_objective(m, &interp_curves(grid, c), noise, w).0;
-    let k = (0..grid.len())
-        .min_by(|&a, &b| obj(grid[a].0).total_cmp(&obj(grid[b].0)))
-        .unwrap_or(0);
+    // Each point's objective once (a comparator calling it would evaluate
+    // every point twice); the first of equal minima, as before.
+    let lowest = |pts: &mut dyn Iterator<Item = (usize, f64)>| {
+        pts.map(|(i, x)| (i, x, obj(x)))
+            .min_by(|a, b| a.2.total_cmp(&b.2))
+    };
+    let k = lowest(&mut grid.iter().map(|g| g.0).enumerate()).map_or(0, |b| b.0);
     let lo = grid[k.saturating_sub(1)].0;
     let hi = grid[(k + 1).min(grid.len() - 1)].0;
     let scan = 64;
     let h = (hi - lo) / scan as f64;
-    let best = (0..=scan)
-        .map(|i| lo + h * i as f64)
-        .min_by(|a, b| obj(*a).total_cmp(&obj(*b)))
-        .unwrap_or(grid[k].0);
+    let best = lowest(&mut (0..=scan).map(|i| (i, lo + h * i as f64))).map_or(grid[k].0, |b| b.1);
     let c = golden((best - h).max(lo), (best + h).min(hi), 30, obj);
     let (_, dz, psi, _, _) = stroke_objective(m, &interp_curves(grid, c), noise, w);
     (c, dz, psi)

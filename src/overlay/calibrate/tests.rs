@@ -119,7 +119,7 @@ fn force_fit_recovers_a_table_and_standoff() {
     super::super::predict::lag_filter(&mut f, dt, tau);
     let c = ForceCycle { s, f, v, dt };
     let knots = [0.0, 0.2, 0.5, 2.0];
-    let (so, t, vals) = fit_force(&[&c], &knots, None, &p, (14.0, 200e-6), (1.0, 200e-6), 50);
+    let (so, t, vals) = fit_force(&[&c], &knots, None, &p, (14.0, 200e-6), (1.0, 200e-6));
     assert!((so - 13.8).abs() < 0.01, "{so}");
     assert!((t - tau).abs() < 10e-6, "{t}");
     assert!(

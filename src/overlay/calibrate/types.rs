@@ -103,12 +103,12 @@ pub struct CalibrationReport {
 /// coverage sweep's logs is in docs/rig-logs.md.
 pub(super) const ENSEMBLE_RTOL: f64 = 1e-4;
 
-/// Golden-section iterations of the force fit (each a nested search: the
-/// standoff inside, the load cell's lag outside). The wide search (±2 mm,
-/// 0–400 µs) shrinks its bracket by 0.618¹⁹ ≈ 1.1·10⁻⁴: to 0.4 µm of
-/// standoff and 0.04 µs of lag, under a fiftieth of their σ (~0.02 mm,
-/// several µs); the narrow ones around a first fit (±0.3 mm, ±60 µs) by
-/// 0.618¹⁵ ≈ 7·10⁻⁴: to 0.4 µm and 0.09 µs.
-/// (They were 30, 18 and 24: the force fit was half of a calibration's time.)
-pub(super) const FORCE_ITERS_WIDE: usize = 19;
-pub(super) const FORCE_ITERS_NARROW: usize = 15;
+/// Tolerances of the force fit's searches (each nested: the standoff
+/// inside, the load cell's lag outside; Brent's method, whose bracket ends
+/// within about four times these): 0.1 µm of standoff and 0.01 µs of lag,
+/// far under a fiftieth of their σ (~0.02 mm, several µs).
+/// (They were golden sections of 19 and 15 iterations, brackets of 0.4 µm
+/// and 0.04–0.09 µs: ~420 and ~270 evaluations of the whole force record
+/// per search, a quarter of a calibration's CPU; docs/rig-logs.md.)
+pub(super) const FORCE_TOL_STANDOFF_MM: f64 = 1e-4;
+pub(super) const FORCE_TOL_TAU_S: f64 = 1e-8;
