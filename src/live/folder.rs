@@ -287,6 +287,28 @@ impl FolderTail {
     }
 }
 
+/// What tells a file from another of the same name (a rig that reuses
+/// a name writes a new file): its inode and length where there are inodes,
+/// else its length and modification time.
+pub(super) type FileIdentity = (u64, u64);
+
+pub(super) fn file_identity(p: &Path) -> Option<FileIdentity> {
+    let md = std::fs::metadata(p).ok()?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((md.ino(), md.len()))
+    }
+    #[cfg(not(unix))]
+    {
+        let m = md.modified().ok()?;
+        let ns = m
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        Some((ns, md.len()))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

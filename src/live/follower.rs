@@ -9,7 +9,7 @@ use super::alarms::{Alarms, CycleInput};
 use super::cycles::CycleTracker;
 use super::decode::LiveDecoder;
 use super::events::*;
-use super::folder::FolderTail;
+use super::folder::{FileIdentity, FolderTail, file_identity};
 use super::tail::{McapTail, TailState};
 use super::{FollowConfig, FollowInputs};
 use crate::process::{CycleStatus, ProcessRecipe, learn, monitor};
@@ -153,28 +153,6 @@ pub struct Follower {
     last_rescan: Instant,
     /// When the allocator last gave free room back (once a minute).
     last_trim: Instant,
-}
-
-/// What tells a file from another of the same name (a rig that reuses
-/// a name writes a new file): its inode and length where there are inodes,
-/// else its length and modification time.
-type FileIdentity = (u64, u64);
-
-fn file_identity(p: &Path) -> Option<FileIdentity> {
-    let md = std::fs::metadata(p).ok()?;
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        Some((md.ino(), md.len()))
-    }
-    #[cfg(not(unix))]
-    {
-        let m = md.modified().ok()?;
-        let ns = m
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos() as u64);
-        Some((ns, md.len()))
-    }
 }
 
 fn cycle_of_name(p: &Path) -> Option<u64> {
