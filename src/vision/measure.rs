@@ -158,6 +158,50 @@ pub fn measure_blob<P: Px>(
     dilate: usize,
     hi_floor: Option<f32>,
 ) -> Option<BlobMeasure> {
+    measure_impl(plane, sign, roi, seed, loc, dilate, hi_floor, false)
+}
+
+/// As [`measure_blob`], but a blob whose half-level mask runs into a
+/// larger bright structure (it reaches the window's border: debris lying
+/// on the housing's edge against a brighter fixture) is cut from it where
+/// it separates: the level is raised step by step, as in a component
+/// tree, on a 3 × 3 mean, until the component at the seed is clear of the
+/// border (and still stands `APART_SIGMA` σ of that mean above the level).
+/// `lo` is then the saddle level, so `hi − lo` is the blob's prominence;
+/// its coverage on each side is counted from the level beside it, but never
+/// from above the saddle. A blob that never separates keeps
+/// `touches_border`.
+#[allow(clippy::too_many_arguments)]
+pub fn measure_blob_apart<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    roi: Roi,
+    seed: (f64, f64),
+    loc: Localiser,
+    dilate: usize,
+    hi_floor: Option<f32>,
+) -> Option<BlobMeasure> {
+    measure_impl(plane, sign, roi, seed, loc, dilate, hi_floor, true)
+}
+
+/// Steps from the half level to the blob's top in which the separation
+/// from a larger structure is looked for (`measure_blob_apart`).
+const APART_STEPS: usize = 10;
+/// How far (σ of the 3 × 3 mean) a blob cut from a larger structure must
+/// stand above the saddle where they join.
+const APART_SIGMA: f32 = 4.0;
+
+#[allow(clippy::too_many_arguments)]
+fn measure_impl<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    roi: Roi,
+    seed: (f64, f64),
+    loc: Localiser,
+    dilate: usize,
+    hi_floor: Option<f32>,
+    apart: bool,
+) -> Option<BlobMeasure> {
     let (rw, rh) = (roi.w(), roi.h());
     if rw < 3 || rh < 3 {
         return None;
@@ -232,10 +276,72 @@ pub fn measure_blob<P: Px>(
         }
         comp = Some((lab, best));
     }
-    let (lab, bi) = comp?;
+    let (mut lab, mut bi) = comp?;
+    let at_border = |b: &label::Blob| {
+        b.x_min == 0 || b.y_min == 0 || b.x_max as usize + 1 == rw || b.y_max as usize + 1 == rh
+    };
+    let mut saddle: Option<f32> = None;
+    let mut smoothed: Option<Vec<f32>> = None;
+    if apart && at_border(&lab.blobs[bi]) {
+        // On a 3 × 3 mean (noise σ / 3: a noise bump on a ridge is not a
+        // blob, debris of 0.4 tips still is): the component's top, then the
+        // lowest level below it at which the component holding the seed no
+        // longer reaches the border. The blob must stand clear of the
+        // structure it touches by `APART_SIGMA` σ of that mean.
+        let vs = smoothed.insert(box3(&v, rw, rh));
+        let b = &lab.blobs[bi];
+        let mut top = f32::NEG_INFINITY;
+        for &ri in &b.runs {
+            let r = lab.runs[ri as usize];
+            for x in r.x0..r.x1 {
+                top = top.max(vs[r.y as usize * rw + x as usize]);
+            }
+        }
+        let (sxi, syi) = (sx.round(), sy.round());
+        for step in 1..APART_STEPS {
+            let level = thr + (top - thr) * step as f32 / APART_STEPS as f32;
+            if top - level < APART_SIGMA * noise / 3.0 {
+                break;
+            }
+            let l2 = label::label(rw, rh, |x, y| vs[y * rw + x] > level);
+            // The component under (or within 1.5 px of) the seed.
+            let near = l2
+                .blobs
+                .iter()
+                .enumerate()
+                .map(|(i, b)| {
+                    let dx = (b.x_min as f64 - sxi).max(sxi - b.x_max as f64).max(0.0);
+                    let dy = (b.y_min as f64 - syi).max(syi - b.y_max as f64).max(0.0);
+                    (i, dx * dx + dy * dy, b.area)
+                })
+                .filter(|t| t.1 <= 2.25)
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(b.2.cmp(&a.2)))
+                .map(|t| t.0);
+            let Some(i) = near else { break };
+            if !at_border(&l2.blobs[i]) {
+                saddle = Some(level);
+                lab = l2;
+                bi = i;
+                break;
+            }
+        }
+    }
     let b = &lab.blobs[bi];
-    let touches_border =
-        b.x_min == 0 || b.y_min == 0 || b.x_max as usize + 1 == rw || b.y_max as usize + 1 == rh;
+    let touches_border = at_border(b);
+    if let (Some(s), Some(vs)) = (saddle, smoothed.as_ref()) {
+        // The blob's own level: the median inside its separated mask, on
+        // the same 3 × 3 mean as the saddle (so `hi − lo` is a prominence
+        // in one currency, even for a ridge thinner than the mean).
+        let mut inside: Vec<f32> = Vec::with_capacity(b.area as usize);
+        for &ri in &b.runs {
+            let r = lab.runs[ri as usize];
+            inside.extend_from_slice(
+                &vs[r.y as usize * rw + r.x0 as usize..r.y as usize * rw + r.x1 as usize],
+            );
+        }
+        hi = percentile(&mut inside, 0.5).max(s);
+        thr = s;
+    }
 
     // Mask and its dilation (square, radius `dilate`).
     let mut mask = vec![0u8; rw * rh];
@@ -362,14 +468,23 @@ pub fn measure_blob<P: Px>(
     let lo_s: Vec<f32> = outside
         .iter_mut()
         .map(|o| {
-            if o.len() >= 3 {
+            if let Some(s) = saddle {
+                // Cut from a larger structure: each side measured from the
+                // level beside it (the housing's, the fixture's), never
+                // from above the saddle where the two join.
+                if o.len() >= 3 {
+                    percentile(o, 0.1).min(s)
+                } else {
+                    s
+                }
+            } else if o.len() >= 3 {
                 percentile(o, 0.1).min(lo0)
             } else {
                 lo0
             }
         })
         .collect();
-    let lo = lo0;
+    let lo = saddle.unwrap_or(lo0);
     // Coverage of pixel i counted from `from` of the way between the local
     // background and `hi_cov` (0: the full range).
     let coverage = |i: usize, x: usize, y: usize, from: f32| -> f64 {
@@ -466,6 +581,20 @@ pub fn measure_blob<P: Px>(
     })
 }
 
+/// 3 × 3 mean of a `rw` × `rh` window (cut at its edges).
+fn box3(v: &[f32], rw: usize, rh: usize) -> Vec<f32> {
+    (0..rw * rh)
+        .map(|i| {
+            let (mut s, mut n) = (0f32, 0f32);
+            for j in block3x3(i, rw, rh) {
+                s += v[j];
+                n += 1.0;
+            }
+            s / n
+        })
+        .collect()
+}
+
 /// The indices of the 3×3 block around pixel `i` of a `rw`×`rh` window
 /// (the pixel itself included; cut at the window's edges), row by row.
 fn block3x3(i: usize, rw: usize, rh: usize) -> impl Iterator<Item = usize> {
@@ -477,4 +606,73 @@ fn block3x3(i: usize, rw: usize, rh: usize) -> impl Iterator<Item = usize> {
             inside.then(|| ny as usize * rw + nx as usize)
         })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 40 × 40 window: housing (level 40) below y = 20, a brighter
+    /// fixture (150) above; `blob` adds a 6 × 6 square of level 220
+    /// straddling the edge at x 17..23, y 17..23, and `ripple` a ridge of
+    /// level 200 along the edge with a bump of 210 instead.
+    fn scene(blob: bool, ripple: bool) -> Vec<u16> {
+        let mut d = vec![0u16; 40 * 40];
+        for y in 0..40 {
+            for x in 0..40 {
+                let mut v = if y < 20 { 150 } else { 40 };
+                if ripple && (19..21).contains(&y) {
+                    v = if (18..22).contains(&x) { 210 } else { 200 };
+                }
+                if blob && (17..23).contains(&x) && (17..23).contains(&y) {
+                    v = 220;
+                }
+                d[y * 40 + x] = v;
+            }
+        }
+        d
+    }
+
+    fn measure(d: &[u16], apart: bool) -> BlobMeasure {
+        let plane = Plane {
+            w: 40,
+            h: 40,
+            data: d,
+        };
+        let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 9.0, 40, 40);
+        let f = if apart {
+            measure_blob_apart
+        } else {
+            measure_blob
+        };
+        f(&plane, 1.0, roi, (19.5, 19.5), Localiser::Coverage, 2, None).expect("a blob")
+    }
+
+    #[test]
+    fn debris_on_an_edge_is_cut_from_the_brighter_fixture_at_their_saddle() {
+        let d = scene(true, false);
+        // At half level the debris runs into the fixture.
+        assert!(measure(&d, false).touches_border);
+        let m = measure(&d, true);
+        assert!(!m.touches_border);
+        assert!(
+            (m.x - 19.5).abs() < 0.3 && (m.y - 19.5).abs() < 0.3,
+            "{m:?}"
+        );
+        // 36 px² of debris, measured above the saddle: most of it, no more.
+        assert!(m.area_px > 25.0 && m.area_px < 40.0, "{m:?}");
+        assert!(m.lo >= 150.0 && m.lo < 220.0, "{m:?}");
+    }
+
+    #[test]
+    fn a_faint_ripple_on_a_ridge_is_not_cut() {
+        // A bump of 10 on a ridge 50 above the fixture, no noise: at half
+        // level it is the ridge; cut from it, it stands less above the
+        // saddle than the 0.05 of the tip contrast (here 170 over the
+        // housing) that `top` asks of a cut blob.
+        let d = scene(false, true);
+        assert!(measure(&d, false).touches_border);
+        let m = measure(&d, true);
+        assert!(m.touches_border || m.hi - m.lo < 0.05 * 170.0, "{m:?}");
+    }
 }

@@ -61,6 +61,10 @@ pub(crate) const MIN_TIP_CONTRAST: f64 = 0.5;
 /// ... and its contrast, summed over its pixels, at least this many local
 /// noise σ.
 pub(crate) const MIN_SNR: f64 = 5.0;
+/// A blob cut from a larger bright structure it touches (debris on the
+/// housing's edge against a brighter fixture) must stand at least this
+/// fraction of the local tip contrast above the saddle where they join.
+pub(crate) const MIN_PROMINENCE: f64 = 0.05;
 
 /// Tip level and background level expected at a place, from the nearest
 /// intact tips.

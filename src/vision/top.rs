@@ -17,8 +17,8 @@ use super::measure::{self, BlobMeasure, Roi};
 use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
-    BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of,
-    contrast_ratio, snr_of,
+    BLUR_RELATIVE, Candidate, LocalLevels, MIN_PROMINENCE, MIN_SNR, MIN_TIP_CONTRAST,
+    area_ratio_of, contrast_ratio, snr_of,
 };
 
 /// Full-resolution measurement of every coarse blob.
@@ -662,25 +662,41 @@ pub fn inspect_top<P: Px>(
         // tip-bright units (a faint stain weighs little), its level as a
         // fraction of the local tip level, its contrast against the local
         // noise floor.
+        // A blob whose half-level mask runs past its window (debris on the
+        // housing's edge, joined at half level to a brighter fixture) is
+        // cut from that structure where it separates and measured above
+        // the saddle (`measure_blob_apart`); what never separates stays a
+        // housing edge or frame.
+        let apart = c.m.touches_border;
+        let remeasure = |floor: Option<f32>| {
+            let f = if apart {
+                measure::measure_blob_apart
+            } else {
+                measure::measure_blob
+            };
+            f(plane, sign, c.roi, c.seed, opts.localiser, dilate, floor)
+        };
         let expected = levels.expected(c.m.x, c.m.y);
         let (m, rho) = match expected {
             Some((t, b)) => {
-                let m = measure::measure_blob(
-                    plane,
-                    sign,
-                    c.roi,
-                    c.seed,
-                    opts.localiser,
-                    dilate,
-                    Some(t),
-                )
-                .unwrap_or_else(|| c.m.clone());
-                (m, Some(contrast_ratio(c.m.hi, t, b)))
+                let m = remeasure(Some(t)).unwrap_or_else(|| c.m.clone());
+                let hi = if apart { m.hi } else { c.m.hi };
+                (m, Some(contrast_ratio(hi, t, b)))
             }
+            None if apart => (remeasure(None).unwrap_or_else(|| c.m.clone()), None),
             None => (c.m.clone(), None),
         };
+        let cut = apart && !m.touches_border;
+        // How far a cut blob stands above the saddle where it joins the
+        // structure, as a fraction of the local tip contrast: a ripple of a
+        // housing rim or a shading corner stands a few hundredths, debris a
+        // sizeable part of it.
+        let prominence = match expected {
+            Some((t, b)) if cut => contrast_ratio(m.hi, t, b) - contrast_ratio(m.lo, t, b),
+            _ => 1.0,
+        };
         let ar = m.area_px / tip_px;
-        let snr = snr_of(&c.m);
+        let snr = if apart { snr_of(&m) } else { snr_of(&c.m) };
         let (u, v) = sim.inverse(m.x, m.y);
         let dist = rect_distance(u, v, rect);
         let mut e = ExtraResult {
@@ -702,13 +718,18 @@ pub fn inspect_top<P: Px>(
                 ));
                 ignored.push(e);
             }
-        } else if c.m.touches_border {
+        } else if m.touches_border {
             if ar0 >= rule.min_area_ratio {
                 e.ignored_because = Some(
                     "part of a larger structure (it runs past its measuring window): a housing edge or frame, not a separate blob".into(),
                 );
                 ignored.push(e);
             }
+        } else if prominence < MIN_PROMINENCE {
+            e.ignored_because = Some(format!(
+                "joined to a larger bright structure, standing {prominence:.2} of the local tip contrast above their saddle (below {MIN_PROMINENCE}): a ripple of that structure"
+            ));
+            ignored.push(e);
         } else if rho_v < MIN_TIP_CONTRAST {
             if ar0 >= rule.min_area_ratio {
                 e.ignored_because = Some(format!(
@@ -739,6 +760,11 @@ pub fn inspect_top<P: Px>(
                     "∞".to_string()
                 },
             ));
+            if cut && let Some(r) = e.reason.as_mut() {
+                r.push_str(
+                    "; cut from the brighter structure it touches, measured above their saddle",
+                );
+            }
             extras.push(e);
         }
     }
