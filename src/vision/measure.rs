@@ -158,10 +158,33 @@ pub fn measure_blob<P: Px>(
     dilate: usize,
     hi_floor: Option<f32>,
 ) -> Option<BlobMeasure> {
-    measure_impl(plane, sign, roi, seed, loc, dilate, hi_floor, false)
+    measure_blob_split(plane, sign, roi, seed, loc, dilate, hi_floor, false)
 }
 
-/// As [`measure_blob`], but a blob whose half-level mask runs into a
+/// The blob whose bounding box is nearest `p` (0 inside it; squared
+/// distance at most `max_d2`), the larger of equally near ones.
+fn nearest_blob(blobs: &[label::Blob], p: (f64, f64), max_d2: f64) -> Option<usize> {
+    blobs
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let dx = (b.x_min as f64 - p.0).max(p.0 - b.x_max as f64).max(0.0);
+            let dy = (b.y_min as f64 - p.1).max(p.1 - b.y_max as f64).max(0.0);
+            (i, dx * dx + dy * dy, b.area)
+        })
+        .filter(|t| t.1 <= max_d2)
+        .min_by(|a, b| a.1.total_cmp(&b.1).then(b.2.cmp(&a.2)))
+        .map(|t| t.0)
+}
+
+/// Steps from the half level to the blob's top in which the separation
+/// from a larger structure is looked for (`measure_blob_split`).
+const APART_STEPS: usize = 10;
+/// How far (σ of the 3 × 3 mean) a blob cut from a larger structure must
+/// stand above the saddle where they join.
+const APART_SIGMA: f32 = 4.0;
+
+/// As [`measure_blob`]; with `apart`, a blob whose half-level mask runs into a
 /// larger bright structure (it reaches the window's border: debris lying
 /// on the housing's edge against a brighter fixture) is cut from it where
 /// it separates: the level is raised step by step, as in a component
@@ -172,27 +195,7 @@ pub fn measure_blob<P: Px>(
 /// from above the saddle. A blob that never separates keeps
 /// `touches_border`.
 #[allow(clippy::too_many_arguments)]
-pub fn measure_blob_apart<P: Px>(
-    plane: &Plane<P>,
-    sign: f32,
-    roi: Roi,
-    seed: (f64, f64),
-    loc: Localiser,
-    dilate: usize,
-    hi_floor: Option<f32>,
-) -> Option<BlobMeasure> {
-    measure_impl(plane, sign, roi, seed, loc, dilate, hi_floor, true)
-}
-
-/// Steps from the half level to the blob's top in which the separation
-/// from a larger structure is looked for (`measure_blob_apart`).
-const APART_STEPS: usize = 10;
-/// How far (σ of the 3 × 3 mean) a blob cut from a larger structure must
-/// stand above the saddle where they join.
-const APART_SIGMA: f32 = 4.0;
-
-#[allow(clippy::too_many_arguments)]
-fn measure_impl<P: Px>(
+pub fn measure_blob_split<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     roi: Roi,
@@ -250,18 +253,7 @@ fn measure_impl<P: Px>(
     let mut hi = peak;
     for pass in 0..2 {
         let lab = label::label(rw, rh, |x, y| v[y * rw + x] > thr);
-        let best = lab
-            .blobs
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                // Distance from the seed to the bounding box (0 inside), then size.
-                let dx = (b.x_min as f64 - sx).max(sx - b.x_max as f64).max(0.0);
-                let dy = (b.y_min as f64 - sy).max(sy - b.y_max as f64).max(0.0);
-                (i, dx * dx + dy * dy, b.area)
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1).then(b.2.cmp(&a.2)))
-            .map(|t| t.0)?;
+        let best = nearest_blob(&lab.blobs, (sx, sy), f64::INFINITY)?;
         if pass == 0 {
             let b = &lab.blobs[best];
             let mut inside: Vec<f32> = Vec::with_capacity(b.area as usize);
@@ -305,18 +297,7 @@ fn measure_impl<P: Px>(
             }
             let l2 = label::label(rw, rh, |x, y| vs[y * rw + x] > level);
             // The component under (or within 1.5 px of) the seed.
-            let near = l2
-                .blobs
-                .iter()
-                .enumerate()
-                .map(|(i, b)| {
-                    let dx = (b.x_min as f64 - sxi).max(sxi - b.x_max as f64).max(0.0);
-                    let dy = (b.y_min as f64 - syi).max(syi - b.y_max as f64).max(0.0);
-                    (i, dx * dx + dy * dy, b.area)
-                })
-                .filter(|t| t.1 <= 2.25)
-                .min_by(|a, b| a.1.total_cmp(&b.1).then(b.2.cmp(&a.2)))
-                .map(|t| t.0);
+            let near = nearest_blob(&l2.blobs, (sxi, syi), 2.25);
             let Some(i) = near else { break };
             if !at_border(&l2.blobs[i]) {
                 saddle = Some(level);
@@ -640,12 +621,17 @@ mod tests {
             data: d,
         };
         let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 9.0, 40, 40);
-        let f = if apart {
-            measure_blob_apart
-        } else {
-            measure_blob
-        };
-        f(&plane, 1.0, roi, (19.5, 19.5), Localiser::Coverage, 2, None).expect("a blob")
+        measure_blob_split(
+            &plane,
+            1.0,
+            roi,
+            (19.5, 19.5),
+            Localiser::Coverage,
+            2,
+            None,
+            apart,
+        )
+        .expect("a blob")
     }
 
     #[test]

@@ -665,16 +665,20 @@ pub fn inspect_top<P: Px>(
         // A blob whose half-level mask runs past its window (debris on the
         // housing's edge, joined at half level to a brighter fixture) is
         // cut from that structure where it separates and measured above
-        // the saddle (`measure_blob_apart`); what never separates stays a
+        // the saddle (`measure_blob_split`); what never separates stays a
         // housing edge or frame.
         let apart = c.m.touches_border;
         let remeasure = |floor: Option<f32>| {
-            let f = if apart {
-                measure::measure_blob_apart
-            } else {
-                measure::measure_blob
-            };
-            f(plane, sign, c.roi, c.seed, opts.localiser, dilate, floor)
+            measure::measure_blob_split(
+                plane,
+                sign,
+                c.roi,
+                c.seed,
+                opts.localiser,
+                dilate,
+                floor,
+                apart,
+            )
         };
         let expected = levels.expected(c.m.x, c.m.y);
         let (m, rho) = match expected {
