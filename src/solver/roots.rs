@@ -210,7 +210,7 @@ where
 /// ([`maximize`] of −f) to an abscissa tolerance `t_tol` (the bracket ends
 /// within about 4·`t_tol`). Returns (x, f(x), evaluations). On a smooth
 /// objective it needs a fraction of a plain golden section's evaluations
-/// for the same bracket, and never more than about twice as many.
+/// for the same bracket (unit test below).
 pub fn brent_min(lo: f64, hi: f64, t_tol: f64, mut f: impl FnMut(f64) -> f64) -> (f64, f64, u32) {
     let (x, g, n) = maximize(
         |x| -f(x),

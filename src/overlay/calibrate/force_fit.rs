@@ -215,19 +215,25 @@ pub(super) fn fit_force(
 ) -> (f64, f64, Vec<f64>) {
     use crate::solver::roots::brent_min;
     let (s0, t0) = around;
-    let inner = |tau: f64| {
-        let (so, ss, _) = brent_min(s0 - spans.0, s0 + spans.0, FORCE_TOL_STANDOFF_MM, |so| {
-            force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0
-        });
-        (so, ss)
-    };
+    // The standoff of the best τ so far, kept so that the best τ's inner
+    // search is not run again (Brent returns its best point, and keeps the
+    // newer of equal ones, as `<=` does here).
+    let mut best = (f64::INFINITY, s0);
     let (tau, _, _) = brent_min(
         (t0 - spans.1).max(0.0),
         t0 + spans.1,
         FORCE_TOL_TAU_S,
-        |t| inner(t).1,
+        |tau| {
+            let (so, ss, _) = brent_min(s0 - spans.0, s0 + spans.0, FORCE_TOL_STANDOFF_MM, |so| {
+                force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1).0
+            });
+            if ss <= best.0 {
+                best = (ss, so);
+            }
+            ss
+        },
     );
-    let (so, _) = inner(tau);
+    let so = best.1;
     let (_, vals, _) = force_fit(cycles, knots, fixed, &p.f_wd, so, tau, p.v0, p.v1);
     (so, tau, vals)
 }
