@@ -12,6 +12,52 @@ pub(super) struct ForceCycle {
     pub(super) f: Vec<f64>,
     pub(super) v: Vec<f64>,
     pub(super) dt: f64,
+    /// Where the samples start to matter for a given standoff (see
+    /// [`ForceCycle::new`]), so that the objective, evaluated thousands of
+    /// times per calibration, skips the approach to the part.
+    reach: Reach,
+}
+
+/// Prefix maxima of the stroke: the first sample past a level is the first
+/// at which the running maximum passes it (subtraction is monotone, so the
+/// same comparison on the maximum finds the same sample).
+struct Reach {
+    /// Running maximum of the finite strokes.
+    any: Vec<f64>,
+    /// Running maximum of the finite strokes at which the pin bar moves
+    /// down (v > 0): the samples the insertion regressors can see.
+    down: Vec<f64>,
+    /// The first sample moving up or at rest (v ≤ 0, both finite): from
+    /// there a withdrawal load may act, whatever the depth.
+    first_up: usize,
+}
+
+impl ForceCycle {
+    pub(super) fn new(s: Vec<f64>, f: Vec<f64>, v: Vec<f64>, dt: f64) -> Self {
+        let (mut any, mut down) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let mut first_up = s.len();
+        let mut reach = Reach {
+            any: Vec::with_capacity(s.len()),
+            down: Vec::with_capacity(s.len()),
+            first_up: 0,
+        };
+        for (j, (&sj, &vj)) in s.iter().zip(&v).enumerate() {
+            if sj.is_finite() {
+                any = any.max(sj);
+                if vj.is_finite() {
+                    if vj > 0.0 {
+                        down = down.max(sj);
+                    } else {
+                        first_up = first_up.min(j);
+                    }
+                }
+            }
+            reach.any.push(any);
+            reach.down.push(down);
+        }
+        reach.first_up = first_up;
+        ForceCycle { s, f, v, dt, reach }
+    }
 }
 
 /// Grid points within this many degrees of bottom dead centre are left out of
@@ -75,21 +121,42 @@ pub(super) fn force_fit(
     for c in cycles {
         let (ea, b0, b1) = crate::overlay::predict::ramp_lag_coefficients(c.dt, tau);
         let n = c.s.len();
+        let half = n / 2;
         let excl = (BDC_EXCLUDE_DEG / 360.0 * n as f64).round() as usize;
-        let stop = (0..n / 2)
+        // No sample before the stroke first comes within 0.5 mm of the
+        // standoff can stop the fit.
+        let near = c.reach.any[..half].partition_point(|&m| !(m - standoff_mm > -0.5));
+        let stop = (near..half)
             .find(|&j| {
                 c.s[j].is_finite()
                     && c.s[j] - standoff_mm > -0.5
                     && c.v[j].is_finite()
                     && c.v[j] < FIT_MIN_SPEED
             })
-            .unwrap_or(n / 2);
+            .unwrap_or(half);
+        // The approach: until a downward sample passes the standoff (and,
+        // with a withdrawal load, until the pin bar first moves up) every
+        // regressor and the withdrawal term are exactly zero, and so is the
+        // filter's state; only the measured force of those samples is
+        // fitted (against zero), as the full loop below would.
+        let mut quiet = c.reach.down[..stop].partition_point(|&m| !(m - standoff_mm > 0.0));
+        if !f_wd.is_zero() {
+            quiet = quiet.min(c.reach.first_up);
+        }
+        for j in 0..quiet {
+            let y = c.f[j];
+            if j.abs_diff(half) > excl && y.is_finite() && y.abs() > 0.5 {
+                cols.extend(std::iter::repeat_n(0.0, k));
+                ys.push(y);
+                fixed_part.push(0.0);
+            }
+        }
         let mut state = vec![0.0; k];
         let mut state_wd = 0.0;
         let mut prev_wd = 0.0;
         prev.iter_mut().for_each(|x| *x = 0.0);
         // Nothing after `stop` is fitted, and the filter only looks back.
-        for j in 0..stop {
+        for j in quiet..stop {
             let (s, v) = (c.s[j], c.v[j]);
             let d = if s.is_finite() {
                 s - standoff_mm

@@ -222,12 +222,7 @@ pub fn calibrate(
                     })
                     .collect();
                 let v = velocity(&s, omega_deg(c));
-                ForceCycle {
-                    s,
-                    f: c.force_n.clone(),
-                    v,
-                    dt: c.duration_s / n as f64,
-                }
+                ForceCycle::new(s, c.force_n.clone(), v, c.duration_s / n as f64)
             })
             .collect()
     };

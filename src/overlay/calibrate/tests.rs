@@ -117,7 +117,7 @@ fn force_fit_recovers_a_table_and_standoff() {
         })
         .collect();
     super::super::predict::lag_filter(&mut f, dt, tau);
-    let c = ForceCycle { s, f, v, dt };
+    let c = ForceCycle::new(s, f, v, dt);
     let knots = [0.0, 0.2, 0.5, 2.0];
     let (so, t, vals) = fit_force(&[&c], &knots, None, &p, (14.0, 200e-6), (1.0, 200e-6));
     assert!((so - 13.8).abs() < 0.01, "{so}");
@@ -126,4 +126,106 @@ fn force_fit_recovers_a_table_and_standoff() {
         (vals[2] - 21.0).abs() < 0.5 && (vals[3] - 23.0).abs() < 0.5,
         "{vals:?}"
     );
+}
+
+/// The force objective skips the approach to the part (where every
+/// regressor is exactly zero): its sum of squares and fitted-sample count
+/// must be those of the plain loop over every sample, to the bit, on
+/// cycles with force noise above the fitted threshold before the part,
+/// missing samples, the pin bar at rest or moving up near TDC, and with
+/// and without a withdrawal load.
+#[test]
+fn the_force_objective_skipping_the_approach_equals_the_plain_loop() {
+    use crate::model::table::Table;
+    let p = Params::paper();
+    let n = 720;
+    let knots = [0.0, 0.2, 0.5, 2.0];
+    let vals = [0.0, 8.0, 21.0, 23.0];
+    let mut rng = crate::rng::SplitMix64::<0>::new(7);
+    // The plain loop (the objective as it was before the skip), for fixed
+    // table values.
+    let plain = |c: &ForceCycle, f_wd: &Table, so: f64, tau: f64| -> (f64, usize) {
+        // Hat basis on the knots (the last value held beyond the last knot).
+        let hat = |d: f64| -> [f64; 4] {
+            let mut b = [0.0; 4];
+            if d >= knots[3] {
+                b[3] = 1.0;
+            } else if d > 0.0 {
+                let i = knots.iter().position(|&x| x > d).unwrap();
+                let w = (d - knots[i - 1]) / (knots[i] - knots[i - 1]);
+                b[i - 1] = 1.0 - w;
+                b[i] = w;
+            }
+            b
+        };
+        let cd = |v: f64| crate::model::contact::smoothing(v, p.v0, p.v1);
+        let (ea, b0, b1) = crate::overlay::predict::ramp_lag_coefficients(c.dt, tau);
+        let excl = (BDC_EXCLUDE_DEG / 360.0 * n as f64).round() as usize;
+        let stop = (0..n / 2)
+            .find(|&j| {
+                c.s[j].is_finite()
+                    && c.s[j] - so > -0.5
+                    && c.v[j].is_finite()
+                    && c.v[j] < FIT_MIN_SPEED
+            })
+            .unwrap_or(n / 2);
+        let (mut st, mut prev, mut ss, mut cnt) = ([0.0; 4], [0.0; 4], 0.0, 0);
+        let (mut st_wd, mut prev_wd) = (0.0, 0.0);
+        for j in 0..stop {
+            let (s, v) = (c.s[j], c.v[j]);
+            let d = s - so;
+            let (mut x, mut wd) = ([0.0; 4], 0.0);
+            if d.is_finite() && v.is_finite() {
+                if v > 0.0 {
+                    x = hat(d).map(|b| b * cd(v));
+                } else {
+                    wd = -f_wd.eval(d * 1e-3) * cd(-v);
+                }
+            }
+            for i in 0..4 {
+                st[i] = ea * st[i] + b0 * prev[i] + b1 * x[i];
+            }
+            st_wd = ea * st_wd + b0 * prev_wd + b1 * wd;
+            prev = x;
+            prev_wd = wd;
+            let y = c.f[j];
+            let seen = st.iter().any(|x| x.abs() > 1e-9);
+            if j.abs_diff(n / 2) > excl && y.is_finite() && (seen || y.abs() > 0.5) {
+                let pred: f64 = st.iter().zip(&vals).map(|(a, b)| a * b).sum::<f64>() + st_wd;
+                ss += (y - pred).powi(2);
+                cnt += 1;
+            }
+        }
+        (ss, cnt)
+    };
+    let wd_tables = [
+        Table::zero(),
+        Table::from_mm(&[(0.0, 3.0), (1.0, 6.0)]).unwrap(),
+    ];
+    for trial in 0..40 {
+        let so = rng.range(13.0, 15.0);
+        let s: Vec<f64> = (0..n)
+            .map(|j| {
+                let x = 8.0 - 8.0 * (j as f64 * TAU / n as f64).cos() + 0.002 * rng.normal();
+                if rng.uniform() < 0.01 { f64::NAN } else { x }
+            })
+            .collect();
+        let v = velocity(&s, TAU * 20.0);
+        let f: Vec<f64> = (0..n)
+            .map(|j| {
+                let d = s[j] - so;
+                let clean = if v[j] > 0.0 && d > 0.0 { 20.0 } else { 0.0 };
+                clean + rng.range(0.2, 1.0) * rng.normal()
+            })
+            .collect();
+        let c = ForceCycle::new(s, f, v, 0.05 / n as f64);
+        let f_wd = &wd_tables[trial % 2];
+        for (so_try, tau) in [(so, 150e-6), (so - 0.4, 0.0), (so + 0.3, 40e-6)] {
+            let (ss, _, cnt) = force_fit(&[&c], &knots, Some(&vals), f_wd, so_try, tau, p.v0, p.v1);
+            let (ss_ref, cnt_ref) = plain(&c, f_wd, so_try, tau);
+            assert_eq!(cnt, cnt_ref, "trial {trial}, standoff {so_try}");
+            let rel = (ss - ss_ref).abs() / ss_ref.max(1e-300);
+            assert!(rel < 1e-12, "trial {trial}: {ss} vs {ss_ref}");
+        }
+    }
 }
