@@ -101,6 +101,18 @@ pub struct SimOptions {
     pub max_wall_s: f64,
     /// Keep the list of contact events.
     pub record_events: bool,
+    /// Compute the summary's continuous-time figures: peaks refined on the
+    /// dense output, the time averages of |Δs| and |Δv|, the ideal
+    /// mechanism's peaks. An ensemble that only needs the curves (the
+    /// calibration's and the overlay's predictions) turns them off: they
+    /// cost about a tenth of such a run and do not touch the trajectory.
+    /// Off, those figures read NaN. Not a user setting (never serialised).
+    #[serde(skip, default = "figures_on")]
+    pub figures: bool,
+}
+
+fn figures_on() -> bool {
+    true
 }
 
 /// The wall-clock deadline of all model work in this process, from the
@@ -140,6 +152,7 @@ impl Default for SimOptions {
             max_steps: 50_000_000,
             max_wall_s: 300.0,
             record_events: false,
+            figures: true,
         }
     }
 }
@@ -303,7 +316,16 @@ pub enum SimError {
 /// all finite is an error ([`SimError::NonFinite`]), never a result.
 pub fn simulate(p: &Params, opts: &SimOptions, progress: &Progress) -> Result<SimResult, SimError> {
     let r = simulate_unchecked(p, opts, progress)?;
-    match r.summary.non_finite() {
+    // Without the figures (NaN by design) the curves carry the run.
+    let bad = if opts.figures {
+        r.summary.non_finite()
+    } else {
+        r.curves
+            .as_ref()
+            .is_some_and(|c| c.stroke_mm.iter().any(|x| !x.is_finite()))
+            .then_some("stroke_mm")
+    };
+    match bad {
         Some(figure) => Err(SimError::NonFinite(figure)),
         None => Ok(r),
     }

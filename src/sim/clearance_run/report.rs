@@ -47,15 +47,26 @@ pub(super) fn finish<M: JointModel<N>, const N: usize>(
     let (t_rep, t_end) = (r.t_rep, r.t_end);
     let stats = *r.st.stats();
     let tw = t_end - t_rep;
-    let best = r.tracker.best;
-    let ideal = crate::sim::ideal_run::run(
-        how.ideal,
-        &SimOptions {
-            level: crate::sim::Level::Ideal,
-            grid_deg: None,
-            ..opts.clone()
-        },
-    );
+    // Without the figures nothing was tracked: every figure below reads NaN.
+    let best = if opts.figures {
+        r.tracker.best
+    } else {
+        [f64::NAN; crate::sim::summary::NQ]
+    };
+    let ideal_peaks = if opts.figures {
+        let ideal = crate::sim::ideal_run::run(
+            how.ideal,
+            &SimOptions {
+                level: crate::sim::Level::Ideal,
+                grid_deg: None,
+                ..opts.clone()
+            },
+        );
+        (ideal.summary.peak_accel_mps2, ideal.summary.peak_torque_nm)
+    } else {
+        (f64::NAN, None)
+    };
+    let nan_unless = |x: f64| if opts.figures { x } else { f64::NAN };
     let mut notes = Vec::new();
     if r.double_crossings > 0 {
         notes.push(format!(
@@ -92,17 +103,17 @@ pub(super) fn finish<M: JointModel<N>, const N: usize>(
         n_impacts: r.n_impacts,
         peak_accel_mps2: best[Q_ACC],
         peak_contact_force_n: best[Q_FN],
-        disp_dev_mean_mm: r.abs_s.finish(y[M::Q_S]) / tw * 1e3,
+        disp_dev_mean_mm: nan_unless(r.abs_s.finish(y[M::Q_S]) / tw * 1e3),
         disp_dev_max_mm: best[Q_DS] * 1e3,
-        vel_dev_mean_mps: r.abs_v.finish(r.model.deviation(t, &y).0) / tw,
+        vel_dev_mean_mps: nan_unless(r.abs_v.finish(r.model.deviation(t, &y).0) / tw),
         vel_dev_max_mps: best[Q_DV],
         peak_torque_nm: Some(best[Q_M12]),
         torque_dev_rms_nm: Some(((y[M::Q_DM2] - q_start) / tw).max(0.0).sqrt()),
         stroke_min_mm: -best[Q_SMIN] * 1e3,
         stroke_max_mm: best[Q_SMAX] * 1e3,
         peak_process_force_n: Some(best[Q_PROC]),
-        ideal_peak_accel_mps2: ideal.summary.peak_accel_mps2,
-        ideal_peak_torque_nm: ideal.summary.peak_torque_nm,
+        ideal_peak_accel_mps2: ideal_peaks.0,
+        ideal_peak_torque_nm: ideal_peaks.1,
         double_crossings_caught: r.double_crossings,
         peak_penetration_um: best[Q_PEN].max(0.0) * 1e6,
         contact_steps,

@@ -117,6 +117,9 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
                 self.grid_next += 1;
             }
         }
+        if !self.opts.figures {
+            return;
+        }
         // Peaks (the step's last evaluation computed them when the segment
         // ends where the step did).
         let o_b = match self.model.cached_end(mode, tb, y_b) {
