@@ -421,6 +421,41 @@ mod tests {
         }
     }
 
+    /// Without the figures the trajectory and its curves are the same to
+    /// the bit (only the summary's refined peaks and averages are left
+    /// out, and read NaN); the steps taken are the same.
+    #[test]
+    fn a_run_without_figures_has_the_same_curves_and_steps() {
+        let mut p = Params::paper();
+        p.clearance = 0.3e-3;
+        let on = SimOptions {
+            warmup: 1.0,
+            revs: 3.0,
+            rtol: 1e-4,
+            grid_deg: Some(0.5),
+            ..SimOptions::default()
+        };
+        let off = SimOptions {
+            figures: false,
+            ..on.clone()
+        };
+        let a = run(&p, &on, &Progress::hidden()).unwrap();
+        let b = run(&p, &off, &Progress::hidden()).unwrap();
+        let (ca, cb) = (a.curves.unwrap(), b.curves.unwrap());
+        assert!(!ca.stroke_mm.is_empty());
+        assert_eq!(ca.stroke_mm, cb.stroke_mm);
+        assert_eq!(ca.contact_force_n, cb.contact_force_n);
+        assert_eq!(ca.process_force_n, cb.process_force_n);
+        assert_eq!(a.summary.steps, b.summary.steps);
+        assert_eq!(a.summary.rejected_steps, b.summary.rejected_steps);
+        assert_eq!(a.summary.n_impacts, b.summary.n_impacts);
+        assert!(a.summary.peak_accel_mps2.is_finite());
+        assert!(b.summary.peak_accel_mps2.is_nan());
+        assert!(b.summary.disp_dev_mean_mm.is_nan());
+        // And `simulate` accepts such a run (its check is on the curves).
+        assert!(crate::sim::simulate(&p, &off, &Progress::hidden()).is_ok());
+    }
+
     /// The wall-clock budget stops a run that would take longer.
     #[test]
     fn the_wall_clock_budget_stops_a_long_run() {
