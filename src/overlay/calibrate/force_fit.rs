@@ -35,12 +35,8 @@ struct Reach {
 impl ForceCycle {
     pub(super) fn new(s: Vec<f64>, f: Vec<f64>, v: Vec<f64>, dt: f64) -> Self {
         let (mut any, mut down) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let (mut any_at, mut down_at) = (Vec::with_capacity(s.len()), Vec::with_capacity(s.len()));
         let mut first_up = s.len();
-        let mut reach = Reach {
-            any: Vec::with_capacity(s.len()),
-            down: Vec::with_capacity(s.len()),
-            first_up: 0,
-        };
         for (j, (&sj, &vj)) in s.iter().zip(&v).enumerate() {
             if sj.is_finite() {
                 any = any.max(sj);
@@ -52,10 +48,14 @@ impl ForceCycle {
                     }
                 }
             }
-            reach.any.push(any);
-            reach.down.push(down);
+            any_at.push(any);
+            down_at.push(down);
         }
-        reach.first_up = first_up;
+        let reach = Reach {
+            any: any_at,
+            down: down_at,
+            first_up,
+        };
         ForceCycle { s, f, v, dt, reach }
     }
 }
