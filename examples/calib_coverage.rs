@@ -58,6 +58,10 @@ fn main() -> anyhow::Result<()> {
     if let Some(r) = arg::<f64>(&args, "--rtol") {
         opts.predict.rtol = r;
     }
+    if let Some(m) = arg::<String>(&args, "--method") {
+        opts.predict.method = pinsight::solver::Method::parse(&m)
+            .ok_or_else(|| anyhow::anyhow!("invalid --method `{m}`"))?;
+    }
     if let Some(r) = arg::<usize>(&args, "--coarse-revs") {
         opts.predict.revs = r;
     }

@@ -20,6 +20,7 @@ use crate::model::kinematics::Geometry;
 use crate::progress::Progress;
 use crate::rig::cycles::Band;
 use crate::sim::{Level, SimError, SimOptions, simulate};
+use crate::solver::Method;
 use serde::Serialize;
 use std::f64::consts::TAU;
 
@@ -35,6 +36,9 @@ pub struct PredictOptions {
     /// Integrator relative tolerance. Statistics over revolutions do not need
     /// the tight tolerances of the deterministic window: 1e-6 by default.
     pub rtol: f64,
+    /// Integrator: DOP853 by default (the overlay's trajectories); the
+    /// calibration's ensembles use DOPRI5 (see `calibrate::ENSEMBLE_METHOD`).
+    pub method: Method,
     /// Grid points per revolution (must match the measured cycles' grid).
     pub points_per_rev: usize,
     /// First-order lags of the sensors (s) applied to the prediction.
@@ -49,6 +53,7 @@ impl Default for PredictOptions {
             warmup: 3.0,
             revs: 40,
             rtol: 1e-6,
+            method: Method::Dop853,
             points_per_rev: 720,
             laser_lag_s: 0.0,
             force_lag_s: 0.0,
@@ -359,6 +364,7 @@ pub fn predict(
         warmup,
         revs: revs as f64,
         rtol: opts.rtol,
+        method: opts.method,
         grid_deg: Some(360.0 / n as f64),
         // Only the curves are used: the summary's peaks and time averages
         // would cost a tenth of the run for nothing.

@@ -36,12 +36,12 @@
 //!      weight the fit read −1.5 to −2 % low at 12 cycles.
 //!    - With a force channel the stroke fit runs in two stages: the part's
 //!      load acts on the pin bar from the standoff on and changes the
-//!      journal's rattle near BDC, so the fine grid is simulated again with
-//!      the standoff and F_ins the force fit found after the first stage
+//!      journal's rattle near BDC, so the fine grid is simulated with the
+//!      standoff and F_ins a force fit found after the coarse grid
 //!      (predictions at the nominal standoff read 3–11 % low on logs whose
 //!      standoff was 0.1–0.3 mm short).
-//!    - Cost: the ensembles run at rtol 1e-4 (statistics, not trajectories;
-//!      [`ENSEMBLE_RTOL`]) and the force fit's searches (Brent's method)
+//!    - Cost: the ensembles run DOPRI5 at rtol 1e-4 (statistics, not
+//!      trajectories; [`ENSEMBLE_RTOL`], [`ENSEMBLE_METHOD`]) and the force fit's searches (Brent's method)
 //!      stop far under a fiftieth of the estimates' σ
 //!      ([`FORCE_TOL_STANDOFF_MM`]).
 //! 2. Standoff, F_ins table and the load cell's lag — from the force against
@@ -137,7 +137,7 @@ pub fn calibrate(
     };
     let refine_revs =
         (opts.refine_cycles_factor * k_meas).clamp(opts.refine_revs.0, opts.refine_revs.1);
-    progress.set_total(grid_c.len() as u64 + 4 * opts.refine_factors.len() as u64 + 3);
+    progress.set_total(grid_c.len() as u64 + 2 * opts.refine_factors.len() as u64 + 3);
     let run_grid = |p0: &Params,
                     cs: &[f64],
                     revs: usize|
@@ -251,7 +251,7 @@ pub fn calibrate(
     // several per cent from one realisation to the next), again around the
     // estimate when it falls outside the first fine grid.
     let coarse = preds_ok;
-    let centre0 = fit_clearance(&full_meas, &curves_pred(&coarse, None), noise, None).0;
+    let coarse_fit = fit_clearance(&full_meas, &curves_pred(&coarse, None), noise, None);
     let run_stage = |p0: &Params, centre: f64, revs: usize, notes: &mut Vec<String>| {
         let mut centre = centre;
         let mut preds_ok = coarse.clone();
@@ -306,32 +306,29 @@ pub fn calibrate(
             centre = fit.0;
         }
     };
-    // Two stages when the log has a force channel: the part's load acts on
-    // the pin bar from the standoff on and changes the journal's rattle near
+    // With a force channel the fine grid is simulated with the fitted
+    // standoff and F_ins, not the nominal ones: the part's load acts on the
+    // pin bar from the standoff on and changes the journal's rattle near
     // BDC, so predictions made with the nominal standoff and F_ins read the
     // clearance wrong when the rig's differ (measured over the coverage
     // sweep: error/truth correlated +0.31 with standoff − nominal; 5 of the
     // 6 logs outside U95 had a standoff 0.1–0.27 mm short of the nominal,
-    // reading 3–11 % low). Stage 1 (short runs) locates c, Δz and ψ; the
-    // force fit gives the standoff and F_ins; stage 2 simulates the fine
-    // grid again with them (long runs) and everything below uses it.
+    // reading 3–11 % low). The force fit needs Δz and ψ, which the coarse
+    // grid's fit gives well enough: the force fit is repeated on the final
+    // Δz and ψ below. (Until this stop a first stage of fine runs of half
+    // length located c, Δz and ψ for it: a fifth of the model time, and
+    // no better; docs/rig-logs.md.)
     let has_force = cycles.iter().any(|c| !c.force_n.is_empty());
     let mut stage_params = base.clone();
-    let stage1_revs = if has_force {
-        (refine_revs / 2).max(opts.refine_revs.0 / 2)
-    } else {
-        refine_revs
-    };
-    let mut stage = run_stage(base, centre0, stage1_revs, &mut notes);
     if has_force {
-        let (c1, dz1, psi1) = stage.5;
+        let (c1, dz1, psi1) = coarse_fit;
         let fc = make_fcycles(dz1, psi1);
         let refs: Vec<&ForceCycle> = fc.iter().collect();
         let (so, _, vals) = search.wide(&refs, nominal_so);
-        // A first-stage force fit that jumps by more than 1 mm from the
-        // nominal standoff is taken as failed (seen once in 78 sweep logs:
-        // 12.77 mm against a true 14.09, the final fit then found the truth):
-        // stage 2 then runs with the nominal parameters, as before.
+        // A first force fit that jumps by more than 1 mm from the nominal
+        // standoff is taken as failed (seen once in 78 sweep logs: 12.77 mm
+        // against a true 14.09, the final fit then found the truth): the
+        // fine grid then runs with the nominal parameters.
         let plausible = so.is_finite() && (so - nominal_so).abs() <= 1.0;
         if plausible {
             stage_params.standoff = so * 1e-3;
@@ -348,15 +345,15 @@ pub fn calibrate(
         }
         notes.push(if plausible {
             format!(
-                "stroke fit in two stages: {c1:.4} mm with the nominal standoff {nominal_so:.3} mm, then the fine grid simulated again with the fitted standoff {so:.3} mm and F_ins"
+                "stroke fit in two stages: {c1:.4} mm on the coarse grid with the nominal standoff {nominal_so:.3} mm, then the fine grid simulated with the fitted standoff {so:.3} mm and F_ins"
             )
         } else {
             format!(
-                "stroke fit in two stages: the first stage's force fit gave a standoff of {so:.3} mm, more than 1 mm from the nominal {nominal_so:.3} mm; the fine grid simulated again with the nominal parameters"
+                "stroke fit in two stages: the force fit after the coarse grid gave a standoff of {so:.3} mm, more than 1 mm from the nominal {nominal_so:.3} mm; the fine grid simulated with the nominal parameters"
             )
         });
-        stage = run_stage(&stage_params, c1, refine_revs, &mut notes);
     }
+    let stage = run_stage(&stage_params, coarse_fit.0, refine_revs, &mut notes);
     let (preds_ok, fine_c, smooth_c, full_raw, full_pred, fit) = stage;
     // The measured curves' variances fixed at the predicted spread there
     // (not the measured one: see `Weights`), and the fit repeated with them.
