@@ -1,19 +1,11 @@
 //! The dynamics commands end to end: the real binary, its outputs and its
 //! error messages.
 
+mod common;
+
 use std::process::Command;
 
-fn pinsight(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pinsight"))
-        .args(args)
-        .output()
-        .expect("run pinsight");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::run as pinsight;
 
 #[test]
 fn simulate_json_has_every_required_field() {

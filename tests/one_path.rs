@@ -74,8 +74,18 @@ fn batch_export(dir: &Path, load: &[&str], pane: &str) -> Value {
         .map(|p| format!("\"{p}\""))
         .collect::<Vec<_>>()
         .join(", ");
+    batch_run(
+        dir,
+        &format!("[[step]]\nkind = \"load\"\npaths = [{paths}]\n"),
+        pane,
+    )
+}
+
+/// Runs the batch `steps` followed by an export of `pane` to `{pane}.json`
+/// and returns that export.
+fn batch_run(dir: &Path, steps: &str, pane: &str) -> Value {
     let script = format!(
-        "[[step]]\nkind = \"load\"\npaths = [{paths}]\n\n[[step]]\nkind = \"export\"\npane = \"{pane}\"\npath = \"{pane}.json\"\n"
+        "{steps}\n[[step]]\nkind = \"export\"\npane = \"{pane}\"\npath = \"{pane}.json\"\n"
     );
     std::fs::write(dir.join("script.toml"), script).unwrap();
     let out = dir.join("batch-out");
@@ -300,23 +310,11 @@ fn the_motor_level_is_one_answer_from_cli_render_and_batch() {
         .concat(),
         d,
     );
-    let script = "[[step]]\nkind = \"set\"\nlevel = \"motor\"\nvalues = { driver = \"motor\", clearance_mm = 0.1 }\n\n[[step]]\nkind = \"export\"\npane = \"model\"\npath = \"model.json\"\n";
-    std::fs::write(d.join("script.toml"), script).unwrap();
-    let o = bin()
-        .arg("batch")
-        .arg(d.join("script.toml"))
-        .arg("--out")
-        .arg(d.join("batch-out"))
-        .output()
-        .unwrap();
-    let text = std::fs::read_to_string(d.join("batch-out/model.json")).unwrap_or_else(|e| {
-        panic!(
-            "batch export of model: {e}\n{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        )
-    });
-    let batch: Value = serde_json::from_str(&text).unwrap();
+    let batch = batch_run(
+        d,
+        "[[step]]\nkind = \"set\"\nlevel = \"motor\"\nvalues = { driver = \"motor\", clearance_mm = 0.1 }\n\n",
+        "model",
+    );
     assert_eq!(cli["level"], "motor", "{cli:#}");
     let motor = &cli["motor"];
     for key in [
@@ -405,23 +403,11 @@ fn sweep_is_one_answer_from_cli_and_the_study_pane_with_a_failing_case() {
         ],
         d,
     );
-    let script = "[[step]]\nkind = \"set\"\nstudy = { clearances_mm = [0.1, 0.3, 1e-300], speeds_rpm = [1200], materials = [\"alloy_steel\"], warmup = 0, revs = 1 }\n\n[[step]]\nkind = \"run\"\nwhat = \"study\"\n\n[[step]]\nkind = \"export\"\npane = \"study\"\npath = \"study.json\"\n";
-    std::fs::write(d.join("script.toml"), script).unwrap();
-    let o = bin()
-        .arg("batch")
-        .arg(d.join("script.toml"))
-        .arg("--out")
-        .arg(d.join("batch-out"))
-        .output()
-        .unwrap();
-    let text = std::fs::read_to_string(d.join("batch-out/study.json")).unwrap_or_else(|e| {
-        panic!(
-            "batch export of study: {e}\n{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        )
-    });
-    let batch: Value = serde_json::from_str(&text).unwrap();
+    let batch = batch_run(
+        d,
+        "[[step]]\nkind = \"set\"\nstudy = { clearances_mm = [0.1, 0.3, 1e-300], speeds_rpm = [1200], materials = [\"alloy_steel\"], warmup = 0, revs = 1 }\n\n[[step]]\nkind = \"run\"\nwhat = \"study\"\n\n",
+        "study",
+    );
 
     let cases = cli["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 3, "{cli:#}");
@@ -458,23 +444,11 @@ fn the_quick_methods_lab_is_one_answer_from_cli_and_the_methods_pane() {
     let d = dir.path();
     let cli = run_json(&["methods", "--out", "m", "--json"], d);
     let render = run_json(&["render", "methods", "--format", "json"], d);
-    let script = "[[step]]\nkind = \"run\"\nwhat = \"methods\"\n\n[[step]]\nkind = \"export\"\npane = \"methods\"\npath = \"methods.json\"\n";
-    std::fs::write(d.join("script.toml"), script).unwrap();
-    let o = bin()
-        .arg("batch")
-        .arg(d.join("script.toml"))
-        .arg("--out")
-        .arg(d.join("batch-out"))
-        .output()
-        .unwrap();
-    let text = std::fs::read_to_string(d.join("batch-out/methods.json")).unwrap_or_else(|e| {
-        panic!(
-            "batch export of methods: {e}\n{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        )
-    });
-    let batch: Value = serde_json::from_str(&text).unwrap();
+    let batch = batch_run(
+        d,
+        "[[step]]\nkind = \"run\"\nwhat = \"methods\"\n\n",
+        "methods",
+    );
     assert_eq!(cli["effort"], "quick");
     let stability = cli["stability"].as_array().unwrap();
     let fidelity = cli["fidelity"].as_array().unwrap();

@@ -17,32 +17,7 @@ fn pinsight() -> Command {
     common::pinsight_unsharded()
 }
 
-fn ok(o: &Output, codes: &[i32]) {
-    assert!(
-        o.status.code().is_some_and(|c| codes.contains(&c)),
-        "exit {:?}: {}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stderr)
-    );
-}
-
-/// Every file below `dir`, by its path relative to `dir`.
-fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(root: &Path, d: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                let rel = p.strip_prefix(root).unwrap().to_string_lossy().into_owned();
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
+use common::{exit_in as ok, tree};
 
 fn sweep(out: &Path, shard: Option<&str>) -> Output {
     let mut c = pinsight();
@@ -85,18 +60,8 @@ fn sweep_shards_merge_to_the_single_run() {
         .unwrap();
     ok(&o, &[0]);
 
-    let (w, m) = (tree(&whole), tree(&merged));
-    assert_eq!(
-        w.keys().collect::<Vec<_>>(),
-        m.keys().collect::<Vec<_>>(),
-        "the merged folder holds the single run's files"
-    );
-    for (name, bytes) in &w {
-        assert!(
-            bytes == &m[name],
-            "{name} differs between the single run and the merge"
-        );
-    }
+    common::assert_same_tree(&whole, &merged);
+    let w = tree(&whole);
     // No wall-clock time in any file.
     for name in ["sweep.json", "sweep.csv"] {
         let text = String::from_utf8(w[name].clone()).unwrap();

@@ -9,7 +9,6 @@
 
 mod common;
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -39,6 +38,8 @@ fn logs() -> Vec<PathBuf> {
     v
 }
 
+use common::tree;
+
 fn monitor(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
     let o = pinsight()
         .arg("monitor")
@@ -56,19 +57,6 @@ fn monitor(recipe: &Path, out: &Path, extra: &[&str]) -> Output {
         String::from_utf8_lossy(&o.stderr)
     );
     o
-}
-
-fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let e = e.unwrap();
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
 }
 
 #[test]
@@ -136,14 +124,7 @@ fn monitor_shards_merge_to_the_single_run() {
         "the merge's exit status is the single run's: {}",
         String::from_utf8_lossy(&o.stderr)
     );
-    let (w, m) = (tree(&whole), tree(&merged));
-    assert_eq!(w.keys().collect::<Vec<_>>(), m.keys().collect::<Vec<_>>());
-    for (name, bytes) in &w {
-        assert!(
-            bytes == &m[name],
-            "{name} differs between the single run and the merge"
-        );
-    }
+    common::assert_same_tree(&whole, &merged);
 
     // A re-run shard writes the same bytes.
     let again = tmp.path().join("again");

@@ -14,7 +14,6 @@
 
 mod common;
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -28,6 +27,8 @@ fn pinsight() -> Command {
 
 /// `pinsight yield` over the interop images, the rig log with camera
 /// images and a missing input, recipes from `recipes`.
+use common::{assert_same_tree, tree};
+
 fn run_yield(out: &Path, recipes: &Path, extra: &[&str]) -> Output {
     let o = pinsight()
         .arg("yield")
@@ -50,37 +51,6 @@ fn run_yield(out: &Path, recipes: &Path, extra: &[&str]) -> Output {
 }
 
 /// Every file below `dir` (relative path → bytes).
-fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(root: &Path, d: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                let rel = p.strip_prefix(root).unwrap().display().to_string();
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    let mut m = BTreeMap::new();
-    walk(dir, dir, &mut m);
-    m
-}
-
-fn assert_same_tree(a: &Path, b: &Path) {
-    let (ta, tb) = (tree(a), tree(b));
-    assert_eq!(
-        ta.keys().collect::<Vec<_>>(),
-        tb.keys().collect::<Vec<_>>(),
-        "{} and {} hold different files",
-        a.display(),
-        b.display()
-    );
-    for (name, bytes) in &ta {
-        assert!(bytes == &tb[name], "{name} differs");
-    }
-}
-
 fn merge(parts: &[PathBuf], out: &Path) -> Output {
     pinsight()
         .arg("merge")

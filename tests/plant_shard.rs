@@ -134,30 +134,7 @@ fn eight_shards_partition_the_single_run() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
-    let files = |d: &Path| -> BTreeMap<String, Vec<u8>> {
-        std::fs::read_dir(d)
-            .unwrap()
-            .map(|e| {
-                let e = e.unwrap();
-                (
-                    e.file_name().to_string_lossy().into_owned(),
-                    std::fs::read(e.path()).unwrap(),
-                )
-            })
-            .collect()
-    };
-    let (w, mg) = (files(&whole), files(&merged));
-    assert_eq!(
-        w.keys().collect::<Vec<_>>(),
-        mg.keys().collect::<Vec<_>>(),
-        "the merged folder holds the single run's files"
-    );
-    for (name, bytes) in &w {
-        assert!(
-            bytes == &mg[name],
-            "{name} differs between the single run and the merge"
-        );
-    }
+    common::assert_same_tree(&whole, &merged);
     // A merge that lacks a shard, or mixes two jobs, is refused.
     let o = Command::new(env!("CARGO_BIN_EXE_pinsight"))
         .args(["merge"])

@@ -11,6 +11,8 @@
 //!   (process NOK × vision fail) equals the truth file's, connector by
 //!   connector.
 
+mod common;
+
 use pinsight::process::synth::{FaultyLineConfig, LineTruth, faulty_line};
 use pinsight::rig::synth::faults::{FaultRates, InsertionFault};
 use pinsight::rig::synth::{SynthConfig, WriteSettings, write};
@@ -24,18 +26,7 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn pinsight(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pinsight"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::run as pinsight;
 
 fn recipe() -> Recipe {
     Recipe::load(&root().join("fixtures/vision/side-1x6.toml")).unwrap()

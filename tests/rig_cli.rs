@@ -1,7 +1,8 @@
 //! `pinsight log` end to end: text, JSON, exit codes, channel maps.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -9,17 +10,7 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn pinsight(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pinsight"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).to_string(),
-        String::from_utf8_lossy(&out.stderr).to_string(),
-    )
-}
+use common::run as pinsight;
 
 #[test]
 fn text_report_of_a_faulty_log() {

@@ -5,29 +5,20 @@
 //!   generator wrote from its own inputs;
 //! - the CLI's JSON/CSV/PNG outputs, the parameter-file round trip, bad input.
 
+mod common;
+
 use pinsight::model::Params;
 use pinsight::overlay::calibrate::{CalibrateOptions, CalibrationReport, calibrate};
 use pinsight::overlay::compare::model_params;
 use pinsight::progress::Progress;
 use pinsight::rig::{CycleOptions, LoadOptions, analyse, load};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn path(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
-fn pinsight(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_pinsight"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).to_string(),
-        String::from_utf8_lossy(&out.stderr).to_string(),
-    )
-}
+use common::run as pinsight;
 
 fn calibrate_file(rel: &str) -> CalibrationReport {
     let f = path(rel);

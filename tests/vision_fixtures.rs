@@ -3,31 +3,21 @@
 //! and extra right; centre RMS ≤ 0.15 px on the σ = 8 DN images and
 //! ≤ 0.05 px on the others.
 
+mod common;
+
 use pinsight::vision::{self, InspectOptions, PinStatus, Recipe, truth};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 #[test]
 fn synthetic_fixtures_agree_with_their_truth() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/vision");
-    let mut jsons: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    jsons.sort();
+    let jsons = common::truth_files(&dir);
     assert!(jsons.len() >= 10);
     let (mut noisy, mut quiet) = (Vec::new(), Vec::new());
     for j in &jsons {
         let t = truth::Truth::from_json(&std::fs::read_to_string(j).unwrap()).unwrap();
         let stem = j.file_stem().unwrap().to_string_lossy().to_string();
-        let img = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .find(|p| {
-                p.file_stem().is_some_and(|s| s.to_string_lossy() == stem)
-                    && p.extension().is_some_and(|x| x != "json")
-            })
-            .unwrap();
+        let img = common::image_beside(j);
         let recipe = Recipe::load(&dir.join(&t.recipe)).unwrap();
         let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
             .unwrap_or_else(|e| panic!("{stem}: {e}"));

@@ -7,6 +7,8 @@
 //! noise σ = 8 DN added. The measured figures are printed (run with
 //! `--nocapture`).
 
+mod common;
+
 use pinsight::vision::batch::{self, ItemStatus, RecipeBook};
 use pinsight::vision::synth::Rng;
 use pinsight::vision::{self, GrayData, InspectOptions, PinStatus, Recipe, truth};
@@ -25,23 +27,10 @@ struct Case {
 
 fn cases() -> Vec<Case> {
     let mut v = Vec::new();
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    files.sort();
-    for j in files {
+    for j in common::truth_files(&dir()) {
         let t = truth::Truth::from_json(&std::fs::read_to_string(&j).unwrap()).unwrap();
         let stem = j.file_stem().unwrap().to_string_lossy().to_string();
-        let image = std::fs::read_dir(dir())
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .find(|p| {
-                p.file_stem().is_some_and(|s| s.to_string_lossy() == stem)
-                    && p.extension().is_some_and(|x| x != "json")
-            })
-            .unwrap();
+        let image = common::image_beside(&j);
         let recipe = Recipe::load(&dir().join(&t.recipe)).unwrap();
         v.push(Case {
             name: stem,

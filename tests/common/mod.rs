@@ -74,3 +74,95 @@ pub fn pinsight_unsharded() -> std::process::Command {
     }
     c
 }
+
+/// Every file below `dir` (recursively), by its path relative to `dir`:
+/// what the shard-and-merge tests compare byte for byte.
+pub fn tree(dir: &std::path::Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    fn walk(
+        root: &std::path::Path,
+        d: &std::path::Path,
+        out: &mut std::collections::BTreeMap<String, Vec<u8>>,
+    ) {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                let rel = p.strip_prefix(root).unwrap().to_string_lossy().into_owned();
+                out.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    let mut out = std::collections::BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+/// `a` and `b` hold the same files with the same bytes.
+pub fn assert_same_tree(a: &std::path::Path, b: &std::path::Path) {
+    let (ta, tb) = (tree(a), tree(b));
+    assert_eq!(
+        ta.keys().collect::<Vec<_>>(),
+        tb.keys().collect::<Vec<_>>(),
+        "{} and {} hold different files",
+        a.display(),
+        b.display()
+    );
+    for (name, bytes) in &ta {
+        assert!(
+            bytes == &tb[name],
+            "{name} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+}
+
+/// The process exited with one of `codes` (its stderr shown otherwise).
+pub fn exit_in(o: &std::process::Output, codes: &[i32]) {
+    assert!(
+        o.status.code().is_some_and(|c| codes.contains(&c)),
+        "exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// Runs the binary (unsharded) in the crate's folder, where the fixture
+/// paths are relative to: (exit code, stdout, stderr).
+pub fn run(args: &[&str]) -> (i32, String, String) {
+    let out = pinsight_unsharded()
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run pinsight");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The image a truth file `NAME.json` describes: the file beside it with
+/// the same stem and another extension.
+pub fn image_beside(truth_json: &std::path::Path) -> std::path::PathBuf {
+    let stem = truth_json.file_stem().unwrap().to_owned();
+    std::fs::read_dir(truth_json.parent().unwrap())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            p.file_stem() == Some(stem.as_os_str()) && p.extension().is_some_and(|x| x != "json")
+        })
+        .unwrap_or_else(|| panic!("no image beside {}", truth_json.display()))
+}
+
+/// The truth files (`*.json`) in `dir`, sorted.
+pub fn truth_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut v: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    v.sort();
+    v
+}
