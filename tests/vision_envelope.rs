@@ -14,7 +14,8 @@
 //! 0.081 px; after the model-fitted centres of blurred tips, 2026-11-26:
 //! 95.4 %, 99.30 %, 1 error, 0.069 px; after debris on the housing's edge
 //! is cut from the brighter fixture it touches, 2026-11-26: 95.8 %,
-//! 99.30 %, 1 error, 0.069 px), not issue 12's targets (≥ 99.5 % verdicts,
+//! 99.30 %, 1 error, 0.069 px; after blurred tips' energy is summed in a
+//! fixed disc, 2026-11-27: 96.7 %, 99.32 %, 1 error, 0.069 px), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -95,7 +96,7 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 95.4,
+        pct(right, n) >= 96.2,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );

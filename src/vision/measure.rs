@@ -100,7 +100,9 @@ pub struct BlobMeasure {
     /// neighbouring pixels in the ROI's border ring, / √2.
     pub noise: f32,
     /// Σ (v − local level) over the coverage window: the blob's energy,
-    /// which blur only spreads (sample units × px²).
+    /// which blur only spreads (sample units × px²). The top view replaces
+    /// it, for tips on grid positions under blur, by [`disc_energy`] inside
+    /// a fixed disc.
     pub energy: f64,
     /// Edge spread, px: √π Σ w(1 − w) / perimeter (≈ the blur σ; about
     /// 0.3 for a sharp edge cut by the pixel grid).
@@ -562,6 +564,29 @@ pub fn measure_blob_split<P: Px>(
     })
 }
 
+/// A tip's energy inside a fixed disc: Σ (v − `level`) over the pixels
+/// around `c` (full-resolution px, `sign` space), each weighted by how
+/// much of it lies within radius `r` (a 1 px ramp across the rim). Unlike
+/// [`BlobMeasure::energy`] it is linear in the image and does not depend
+/// on a mask's extent, so noise only adds zero-mean scatter.
+pub fn disc_energy<P: Px>(plane: &Plane<P>, sign: f32, c: (f64, f64), r: f64, level: f32) -> f64 {
+    let x0 = (c.0 - r - 1.0).floor().max(0.0) as usize;
+    let y0 = (c.1 - r - 1.0).floor().max(0.0) as usize;
+    let x1 = ((c.0 + r + 1.0).ceil() as usize).min(plane.w.saturating_sub(1));
+    let y1 = ((c.1 + r + 1.0).ceil() as usize).min(plane.h.saturating_sub(1));
+    let mut e = 0f64;
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let d = (x as f64 - c.0).hypot(y as f64 - c.1);
+            let w = (r + 0.5 - d).clamp(0.0, 1.0);
+            if w > 0.0 {
+                e += w * (sign * plane.at(x, y) - level) as f64;
+            }
+        }
+    }
+    e
+}
+
 /// 3 × 3 mean of a `rw` × `rh` window (cut at its edges).
 fn box3(v: &[f32], rw: usize, rh: usize) -> Vec<f32> {
     (0..rw * rh)
@@ -660,5 +685,78 @@ mod tests {
         assert!(measure(&d, false).touches_border);
         let m = measure(&d, true);
         assert!(m.touches_border || m.hi - m.lo < 0.05 * 170.0, "{m:?}");
+    }
+
+    /// A 40 × 40 image at level 60 with a disc of radius 4 at level 120
+    /// centred at (20.3, 19.6), each pixel painted with its coverage
+    /// (8 × 8 sub-samples); `clump` adds +40 on a 2 × 2 patch touching the
+    /// tip's rim on the right and −40 on a 2 × 2 patch beyond the rim on
+    /// the left (zero sum, as noise).
+    fn tip(clump: bool) -> Vec<u16> {
+        let (cx, cy, r) = (20.3, 19.6, 4.0);
+        let mut d = vec![0u16; 40 * 40];
+        for y in 0..40 {
+            for x in 0..40 {
+                let mut inside = 0;
+                for sy in 0..8 {
+                    for sx in 0..8 {
+                        let px = x as f64 + (sx as f64 + 0.5) / 8.0 - 0.5;
+                        let py = y as f64 + (sy as f64 + 0.5) / 8.0 - 0.5;
+                        if (px - cx).hypot(py - cy) <= r {
+                            inside += 1;
+                        }
+                    }
+                }
+                let mut v = 60.0 + 60.0 * inside as f64 / 64.0;
+                if clump && (19..=20).contains(&y) {
+                    if (25..=26).contains(&x) {
+                        v += 40.0;
+                    } else if (14..=15).contains(&x) {
+                        v -= 40.0;
+                    }
+                }
+                d[y * 40 + x] = v.round() as u16;
+            }
+        }
+        d
+    }
+
+    #[test]
+    fn disc_energy_is_the_tips_contrast_times_its_area() {
+        let d = tip(false);
+        let plane = Plane {
+            w: 40,
+            h: 40,
+            data: &d[..],
+        };
+        let e = disc_energy(&plane, 1.0, (20.3, 19.6), 7.0, 60.0);
+        let want = 60.0 * std::f64::consts::PI * 16.0;
+        assert!((e / want - 1.0).abs() < 0.01, "{e} against {want}");
+    }
+
+    #[test]
+    fn disc_energy_is_not_moved_by_a_zero_sum_clump_that_the_mask_takes_in() {
+        let (clean, clumped) = (tip(false), tip(true));
+        let plane = |d: &[u16]| -> (f64, f64) {
+            let p = Plane {
+                w: 40,
+                h: 40,
+                data: d,
+            };
+            let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 12.0, 40, 40);
+            let m = measure_blob(&p, 1.0, roi, (20.3, 19.6), Localiser::Coverage, 2, None)
+                .expect("a tip");
+            (m.energy, disc_energy(&p, 1.0, (20.3, 19.6), 7.0, 60.0))
+        };
+        let (mask0, disc0) = plane(&clean);
+        let (mask1, disc1) = plane(&clumped);
+        // The half-level mask takes the bright half of the clump in and
+        // clamps the dark half away: its energy grows by most of 4 × 40.
+        assert!(mask1 / mask0 > 1.04, "mask energy {mask0} → {mask1}");
+        // The fixed disc counts both halves: unchanged.
+        assert!(
+            (disc1 / disc0 - 1.0).abs() < 0.005,
+            "disc energy {disc0} → {disc1}"
+        );
     }
 }

@@ -6,6 +6,7 @@
 
 use super::grid;
 use super::measure::{BlobMeasure, Roi};
+use super::recipe::PinShape;
 
 /// A measured blob and what it looks like.
 #[derive(Debug, Clone)]
@@ -54,6 +55,28 @@ pub(crate) fn area_ratio_of(
 /// Blur (edge σ) beyond this fraction of the tip width: tip areas are
 /// judged against the neighbouring tips' energy.
 pub(crate) const BLUR_RELATIVE: f64 = 0.08;
+
+/// Blur σ beyond the tip's outer radius that the fixed disc of a tip's
+/// energy reaches (`tip_disc_radius`): 2 σ holds all but about 2 % of a
+/// blurred edge's light.
+pub(crate) const DISC_BLUR_SIGMAS: f64 = 2.0;
+
+/// Radius (px) of the fixed disc in which a blurred tip's energy is summed
+/// ([`super::measure::disc_energy`]): the nominal tip's outer radius (a
+/// square's half-diagonal) plus `DISC_BLUR_SIGMAS` blur σ, at most half
+/// the smallest pitch so that no neighbour's light is counted.
+pub(crate) fn tip_disc_radius(
+    shape: PinShape,
+    pin_px: f64,
+    blur_sigma: f64,
+    min_pitch_px: f64,
+) -> f64 {
+    let outer = match shape {
+        PinShape::Round => 0.5 * pin_px,
+        PinShape::Square => 0.5 * std::f64::consts::SQRT_2 * pin_px,
+    };
+    (outer + DISC_BLUR_SIGMAS * blur_sigma).min(0.5 * min_pitch_px)
+}
 
 /// A blob counts as tip-bright when its level stands at least this
 /// fraction of the way from the local background to the local tip level.
@@ -105,5 +128,21 @@ pub(crate) fn snr_of(m: &BlobMeasure) -> f64 {
         c * (m.mask_px as f64).sqrt() / m.noise as f64
     } else {
         f64::INFINITY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_energy_disc_holds_the_tip_and_two_blur_sigma_within_half_a_pitch() {
+        // Round 8 px tip, σ 1.5 px: 4 + 2 × 1.5.
+        assert!((tip_disc_radius(PinShape::Round, 8.0, 1.5, 40.0) - 7.0).abs() < 1e-12);
+        // Square: its half-diagonal, 4 √2, + 3.
+        let sq = tip_disc_radius(PinShape::Square, 8.0, 1.5, 40.0);
+        assert!((sq - (4.0 * std::f64::consts::SQRT_2 + 3.0)).abs() < 1e-12);
+        // Never beyond half the pitch (a neighbour's light).
+        assert!((tip_disc_radius(PinShape::Round, 8.0, 1.5, 10.0) - 5.0).abs() < 1e-12);
     }
 }

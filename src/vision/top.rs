@@ -18,7 +18,7 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_PROMINENCE, MIN_SNR, MIN_TIP_CONTRAST,
-    area_ratio_of, contrast_ratio, snr_of,
+    area_ratio_of, contrast_ratio, snr_of, tip_disc_radius,
 };
 
 /// Full-resolution measurement of every coarse blob.
@@ -505,6 +505,19 @@ pub fn inspect_top<P: Px>(
             }
         }
     }
+    // Under blur, a tip's energy is taken inside a fixed disc around its
+    // centre (`tip_disc_radius`) against the housing's level there (the
+    // coarse background, holes filled: one smooth estimate for every tip),
+    // so that it no longer depends on the half-level mask's extent or on
+    // per-tip levels, both of which noise clumps bias (seventh round,
+    // docs/vision.md).
+    let disc_r = tip_disc_radius(recipe.pin_shape, pin_px, blur_sigma, min_pitch_px);
+    if blurred {
+        for &ci in pos_cand.iter().flatten() {
+            let m = &mut cands[ci].m;
+            m.energy = measure::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
+        }
+    }
     let area_of =
         |cands: &[Candidate], ci: usize| area_ratio_of(cands, &assigned, ci, tip_px, blurred);
     let refs: Vec<(f64, f64, f32, f32)> = pos_cand
@@ -533,11 +546,14 @@ pub fn inspect_top<P: Px>(
         };
         let half = (0.9 * pin_px + 2.0).min(0.5 * min_pitch_px);
         let roi = Roi::around(nx, ny, nx, ny, half, plane.w, plane.h);
-        let Some(m) =
+        let Some(mut m) =
             measure::measure_blob(plane, sign, roi, (nx, ny), opts.localiser, dilate, None)
         else {
             continue;
         };
+        if blurred {
+            m.energy = measure::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
+        }
         let rho = contrast_ratio(m.hi, t_exp, b_exp);
         let snr = snr_of(&m);
         let d = (m.x - nx).hypot(m.y - ny);
