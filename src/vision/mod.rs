@@ -39,6 +39,7 @@ pub mod error;
 pub mod fit;
 pub mod gray;
 pub mod grid;
+mod housing;
 pub mod image_io;
 pub mod lab;
 pub mod label;
