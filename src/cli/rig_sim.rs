@@ -82,6 +82,10 @@ pub fn parse_rate(s: &str) -> anyhow::Result<f64> {
     Ok(r)
 }
 
+/// The shortest file rotation `--rotate` accepts (log time): a second
+/// holds at least 16 cycles at the 1000 rpm a line runs at least.
+pub const MIN_ROTATE_S: f64 = 1.0;
+
 pub fn options(args: &Args) -> anyhow::Result<SimOptions> {
     let pos = |v: f64, what: &str, max: f64| -> anyhow::Result<f64> {
         if v.is_finite() && v > 0.0 && v <= max {
@@ -121,11 +125,22 @@ pub fn options(args: &Args) -> anyhow::Result<SimOptions> {
         )?,
         rotate_s: match &args.rotate {
             None => None,
-            Some(r) => Some(pos(
-                parse_duration(r).map_err(|e| anyhow!("--rotate: {e}"))?,
-                "--rotate",
-                1e7,
-            )?),
+            Some(r) => {
+                let v = pos(
+                    parse_duration(r).map_err(|e| anyhow!("--rotate: {e}"))?,
+                    "--rotate",
+                    1e7,
+                )?;
+                // A file per message is no rig log (the options fuzz found
+                // `--rotate 1e-300` writing 25 000 files of one second).
+                if v < MIN_ROTATE_S {
+                    bail!(
+                        "--rotate must be at least {MIN_ROTATE_S} s (a file holds whole cycles), not {}",
+                        crate::fmt::plain(v)
+                    );
+                }
+                Some(v)
+            }
         },
         spindle_hz: pos(args.spindle_hz, "--spindle-hz", 100_000.0)?,
         force_hz: pos(args.force_hz, "--force-hz", 100_000.0)?,
@@ -158,4 +173,31 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         report.wall_s
     );
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn opts(extra: &[&str]) -> anyhow::Result<SimOptions> {
+        let mut argv = vec!["rig-sim", "--out", "x.mcap"];
+        argv.extend_from_slice(extra);
+        options(&Cli::try_parse_from(argv)?.args)
+    }
+
+    #[test]
+    fn a_rotation_shorter_than_a_second_is_refused_and_one_of_a_second_taken() {
+        let e = opts(&["--rotate", "1e-300"]).unwrap_err().to_string();
+        assert!(e.contains("--rotate must be at least 1 s"), "{e}");
+        assert!(opts(&["--rotate", "500ms"]).is_err());
+        assert_eq!(opts(&["--rotate", "1s"]).unwrap().rotate_s, Some(1.0));
+        assert_eq!(opts(&["--rotate", "10m"]).unwrap().rotate_s, Some(600.0));
+    }
 }
