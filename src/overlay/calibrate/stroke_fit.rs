@@ -1,6 +1,7 @@
 //! Fitting the clearance from the stroke: curves over the cycle, their
 //! interpolation across the simulated clearance grid, a golden-section search.
 
+use super::types::SCOUT_MARGIN;
 use rayon::prelude::*;
 use std::f64::consts::TAU;
 
@@ -435,4 +436,43 @@ pub(super) fn t95(nu: f64) -> f64 {
         return 2.0;
     }
     crate::wear::fit::t_quantile(0.975, nu.max(1.0))
+}
+
+/// The coarse nodes (sorted, mm) that run at full length after the scout
+/// round: those inside the range the fine grid will span around the scout's
+/// estimate `c_scout` (`c_scout` × the refine factors' ends, widened by
+/// [`SCOUT_MARGIN`] each way), and the node just below and just above it —
+/// the neighbours the fine grid's curves are interpolated to and the
+/// jackknife may reach. At least three nodes (the nearest by ratio are
+/// added); every node when the estimate is not finite.
+pub(super) fn scout_near(nodes: &[f64], c_scout: f64, refine_factors: &[f64]) -> Vec<f64> {
+    if !c_scout.is_finite() || c_scout <= 0.0 || nodes.len() <= 3 {
+        return nodes.to_vec();
+    }
+    let f_lo = refine_factors.iter().copied().fold(1.0, f64::min);
+    let f_hi = refine_factors.iter().copied().fold(1.0, f64::max);
+    let (lo, hi) = (c_scout * f_lo / SCOUT_MARGIN, c_scout * f_hi * SCOUT_MARGIN);
+    let mut keep: Vec<bool> = nodes.iter().map(|c| *c >= lo && *c <= hi).collect();
+    if let Some(i) = nodes.iter().rposition(|c| *c < lo) {
+        keep[i] = true;
+    }
+    if let Some(i) = nodes.iter().position(|c| *c > hi) {
+        keep[i] = true;
+    }
+    while keep.iter().filter(|k| **k).count() < 3 {
+        let far = |c: f64| (c / c_scout).ln().abs();
+        let Some(i) = (0..nodes.len())
+            .filter(|i| !keep[*i])
+            .min_by(|a, b| far(nodes[*a]).total_cmp(&far(nodes[*b])))
+        else {
+            break;
+        };
+        keep[i] = true;
+    }
+    nodes
+        .iter()
+        .zip(&keep)
+        .filter(|(_, k)| **k)
+        .map(|(c, _)| *c)
+        .collect()
 }

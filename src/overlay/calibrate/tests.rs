@@ -229,3 +229,21 @@ fn the_force_objective_skipping_the_approach_equals_the_plain_loop() {
         }
     }
 }
+
+#[test]
+fn the_scout_keeps_the_fine_range_and_its_two_neighbours() {
+    let grid = [0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.65, 0.8, 1.0];
+    let f = [0.76, 0.87, 1.0, 1.15, 1.32];
+    // 0.3 mm: the fine grid spans 0.228–0.396, widened 0.182–0.495;
+    // inside 0.2, 0.3, 0.4; neighbours 0.15 and 0.5.
+    assert_eq!(scout_near(&grid, 0.3, &f), vec![0.15, 0.2, 0.3, 0.4, 0.5]);
+    // 0.12 mm: 0.073–0.198 → 0.1, 0.15; neighbours 0.05 (ratio 0.42,
+    // the one a span by ratio alone missed) and 0.2.
+    assert_eq!(scout_near(&grid, 0.12, &f), vec![0.05, 0.1, 0.15, 0.2]);
+    // At the grid's ends: the neighbour on the open side does not exist,
+    // and at least three nodes stay.
+    assert_eq!(scout_near(&grid, 0.015, &f), vec![0.02, 0.05, 0.1]);
+    assert_eq!(scout_near(&grid, 1.4, &f), vec![0.65, 0.8, 1.0]);
+    // No estimate: every node.
+    assert_eq!(scout_near(&grid, f64::NAN, &f), grid.to_vec());
+}

@@ -115,6 +115,17 @@ pub(super) const ENSEMBLE_RTOL: f64 = 1e-4;
 /// The overlay's single trajectories stay on DOP853.
 pub(super) const ENSEMBLE_METHOD: Method = Method::Dopri5;
 
+/// The coarse grid's scout round runs every node for this fraction of the
+/// coarse revolutions (48 / 4 = 12): enough to place the stroke fit's
+/// minimum within a node or two, not to fit it.
+pub(super) const SCOUT_FRACTION: usize = 4;
+
+/// The scout's estimate is off by a few per cent (a quarter-length
+/// ensemble; its windowed spread is biased low against long logs): the
+/// range the fine grid will span is widened by this factor each way before
+/// the coarse nodes that run at full length are chosen ([`scout_near`]).
+pub(super) const SCOUT_MARGIN: f64 = 1.25;
+
 /// Tolerances of the force fit's searches (each nested: the standoff
 /// inside, the load cell's lag outside; Brent's method, whose bracket ends
 /// within about four times these): 0.1 µm of standoff and 0.01 µs of lag,
