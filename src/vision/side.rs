@@ -27,7 +27,7 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::side_row::{
     bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
-    tip_crossing,
+    tip_crossing_recentred,
 };
 use super::tip_levels;
 
@@ -304,10 +304,14 @@ pub fn inspect_side<P: Px>(
         // Tip: the apex of the half-level contour, corrected for the blur's
         // pull on a rounded end (`side_row::tip_crossing`, the row's median
         // shape and blur below).
-        let t0 = tip_guess - 2.0 * kf - 4.0;
-        let t1 = tip_guess + 2.0 * kf + 4.0;
+        // The window is re-centred on the first crossing and widened by the
+        // blur (`side_row::tip_crossing_recentred`); it stays above the
+        // bar's measured middle part and inside the frame.
         let sample = |d: f64, y: f64| sign * plane.bilinear(axis.y_at(y) + d, y);
-        if let Some(t) = tip_crossing(&sample, t0, t1, 0.5 * width_px) {
+        let limits = (0.0, ya as f64);
+        if let Some(t) =
+            tip_crossing_recentred(&sample, tip_guess, 2.0 * kf + 4.0, 0.5 * width_px, limits)
+        {
             ends.push((axis, width_px, t));
         }
     }

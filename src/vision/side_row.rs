@@ -328,6 +328,37 @@ pub(super) fn tip_crossing(
     })
 }
 
+/// [`tip_crossing`] in a window that clears the blurred end on both sides,
+/// wherever the coarse guess put it.
+///
+/// The end's levels are the medians of the window's first and last 2 px,
+/// so the window must reach past the blur on each side of the end: under a
+/// blur of σ = 2.5 px, a window of ±6 px whose centre (the coarse blob's
+/// top) lies 3 px inside the bar takes its background level from the
+/// blur's foot and puts the end 0.6 px too low (ok pins called short, the
+/// side view's largest class). So a first pass over `guess ± half` gives
+/// the crossing and σ, and a second pass re-centred on that crossing, over
+/// ± (`half` + 3 σ), measures the end; the first pass is kept where the
+/// second finds none.
+pub(super) fn tip_crossing_recentred(
+    sample: &dyn Fn(f64, f64) -> f32,
+    guess: f64,
+    half: f64,
+    half_w: f64,
+    limits: (f64, f64),
+) -> Option<TipCrossing> {
+    let first = tip_crossing(sample, guess - half, guess + half, half_w)?;
+    let m = half + 3.0 * first.sigma;
+    let (t0, t1) = (
+        (first.y_in - m).max(limits.0),
+        (first.y_in + m).min(limits.1),
+    );
+    if t0 >= first.y_in - half || t1 <= first.y_in + half {
+        return Some(first);
+    }
+    Some(tip_crossing(sample, t0, t1, half_w).unwrap_or(first))
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -402,6 +433,27 @@ mod tests {
         };
         let t = super::tip_crossing(&square, 10.0, 34.0, r).unwrap();
         assert!((t.tip_y(t.c, t.sigma) - apex).abs() < 0.05, "{t:?}");
+    }
+
+    #[test]
+    fn a_blurred_end_is_measured_wherever_the_coarse_guess_lies() {
+        // A square end at y = 20 under blur σ = 2.5 px; the coarse guess 3 px
+        // inside the bar, the window ±6 px around it (as for k = 1).
+        let (apex, sigma) = (20.0f64, 2.5f64);
+        let square = |_d: f64, y: f64| {
+            (100.0 * 0.5 * (1.0 + libm_erf((y - apex) / (sigma * std::f64::consts::SQRT_2)))) as f32
+        };
+        let guess = apex + 3.0;
+        let once = super::tip_crossing(&square, guess - 6.0, guess + 6.0, 4.0).unwrap();
+        assert!(once.tip_y(0.0, 0.0) - apex > 0.4, "{once:?}");
+        let t = super::tip_crossing_recentred(&square, guess, 6.0, 4.0, (0.0, 60.0)).unwrap();
+        assert!((t.tip_y(0.0, 0.0) - apex).abs() < 0.05, "{t:?}");
+        // The same guess 3 px outside the bar: too high before, right after.
+        let guess = apex - 3.0;
+        let once = super::tip_crossing(&square, guess - 6.0, guess + 6.0, 4.0).unwrap();
+        assert!(apex - once.tip_y(0.0, 0.0) > 0.4, "{once:?}");
+        let t = super::tip_crossing_recentred(&square, guess, 6.0, 4.0, (0.0, 60.0)).unwrap();
+        assert!((t.tip_y(0.0, 0.0) - apex).abs() < 0.05, "{t:?}");
     }
 
     /// erf by Abramowitz–Stegun 7.1.26 (|error| < 1.5e-7).
