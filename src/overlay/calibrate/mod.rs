@@ -140,11 +140,16 @@ pub fn calibrate(
     let refine_revs =
         (opts.refine_cycles_factor * k_meas).clamp(opts.refine_revs.0, opts.refine_revs.1);
     progress.set_total(grid_c.len() as u64 + 2 * opts.refine_factors.len() as u64 + 3);
+    // The model at each clearance of `cs` (in parallel); a node the model
+    // fails at is left out of `place`, with a note.
     let run_grid = |p0: &Params,
                     cs: &[f64],
-                    revs: usize|
-     -> Vec<(f64, Result<Prediction, crate::sim::SimError>)> {
-        cs.par_iter()
+                    revs: usize,
+                    place: &str,
+                    notes: &mut Vec<String>|
+     -> Vec<(f64, Prediction)> {
+        let runs: Vec<(f64, Result<Prediction, crate::sim::SimError>)> = cs
+            .par_iter()
             .map(|&c| {
                 let mut p = p0.clone();
                 p.clearance = c * 1e-3;
@@ -156,7 +161,17 @@ pub fn calibrate(
                 progress.inc(1);
                 (c, r)
             })
-            .collect()
+            .collect();
+        let mut ok = Vec::new();
+        for (c, r) in runs {
+            match r {
+                Ok(p) => ok.push((c, p)),
+                Err(e) => notes.push(format!(
+                    "the model failed at clearance {c:.4} mm ({e}); left out of {place}"
+                )),
+            }
+        }
+        ok
     };
     let nb = opts.blocks.max(2);
     // The measured spread is the σ of k_meas cycles in a row: the prediction's
@@ -199,15 +214,7 @@ pub fn calibrate(
     // one-round grid makes, so the fine grid, its neighbours and the
     // jackknife see the same curves: the coarse grid costs about half.
     let scout_revs = (popts.revs / SCOUT_FRACTION).max(8).min(popts.revs);
-    let mut preds_ok = Vec::new();
-    for (c, r) in run_grid(base, &grid_c, scout_revs) {
-        match r {
-            Ok(p) => preds_ok.push((c, p)),
-            Err(e) => notes.push(format!(
-                "the model failed at clearance {c} mm ({e}); left out of the grid"
-            )),
-        }
-    }
+    let mut preds_ok = run_grid(base, &grid_c, scout_revs, "the grid", &mut notes);
     if preds_ok.len() < 3 {
         return Err(OverlayError::NoData {
             file,
@@ -224,15 +231,13 @@ pub fn calibrate(
         progress.set_total(
             grid_c.len() as u64 + near.len() as u64 + 2 * opts.refine_factors.len() as u64 + 3,
         );
-        let mut full = Vec::new();
-        for (c, r) in run_grid(base, &near, popts.revs) {
-            match r {
-                Ok(p) => full.push((c, p)),
-                Err(e) => notes.push(format!(
-                    "the model failed at clearance {c} mm in the coarse grid's second round ({e}); left out of the grid"
-                )),
-            }
-        }
+        let full = run_grid(
+            base,
+            &near,
+            popts.revs,
+            "the coarse grid's second round",
+            &mut notes,
+        );
         if full.len() >= 3 {
             preds_ok = full;
         } else {
@@ -309,15 +314,7 @@ pub fn calibrate(
                 .collect();
             if new_c.len() >= 2 {
                 let (lo, hi) = (new_c[0], new_c[new_c.len() - 1]);
-                let mut fine = Vec::new();
-                for (c, r) in run_grid(p0, &new_c, revs) {
-                    match r {
-                        Ok(p) => fine.push((c, p)),
-                        Err(e) => notes.push(format!(
-                            "the model failed at clearance {c:.4} mm ({e}); left out of the fine grid"
-                        )),
-                    }
-                }
+                let fine = run_grid(p0, &new_c, revs, "the fine grid", notes);
                 preds_ok.retain(|(c, _)| {
                     *c < lo * 0.999
                         || *c > hi * 1.001
