@@ -30,6 +30,10 @@ struct Reach {
     /// The first sample moving up or at rest (v ≤ 0, both finite): from
     /// there a withdrawal load may act, whatever the depth.
     first_up: usize,
+    /// The samples whose measured force is finite and above 0.5 N, in
+    /// order: the only ones of the approach that enter the fit (a scan of
+    /// the whole approach per evaluation cost more than the fit itself).
+    loud: Vec<usize>,
 }
 
 impl ForceCycle {
@@ -51,10 +55,14 @@ impl ForceCycle {
             any_at.push(any);
             down_at.push(down);
         }
+        let loud = (0..f.len())
+            .filter(|&j| f[j].is_finite() && f[j].abs() > 0.5)
+            .collect();
         let reach = Reach {
             any: any_at,
             down: down_at,
             first_up,
+            loud,
         };
         ForceCycle { s, f, v, dt, reach }
     }
@@ -110,12 +118,36 @@ pub(super) fn force_fit(
     };
     let mut ata = vec![0.0; k * k];
     let mut atb = vec![0.0; k];
-    // The regressors of the fitted samples, k per sample (flat: one
-    // allocation, sized for every sample up to the dead centre).
-    let most: usize = cycles.iter().map(|c| c.s.len() / 2).sum();
-    let mut cols: Vec<f64> = Vec::with_capacity(most * k);
-    let mut ys: Vec<f64> = Vec::with_capacity(most);
-    let mut fixed_part: Vec<f64> = Vec::with_capacity(most);
+    // The regressors of the fitted samples, k per sample (flat), their
+    // measured forces and withdrawal terms: kept for the sum of squares once
+    // the values are solved. The buffers are the thread's, reused: a
+    // calibration evaluates this objective some 3 000 times, and fresh
+    // buffers sized for every sample up to the dead centre (a third of a
+    // megabyte for 30 cycles) cost more than the arithmetic.
+    let mut scratch = FIT_SCRATCH.take();
+    let Scratch {
+        cols,
+        ys,
+        fixed_part,
+    } = &mut scratch;
+    cols.clear();
+    ys.clear();
+    fixed_part.clear();
+    // The normal equations' upper triangle, accumulated as the rows come
+    // (the same sums in the same order as a pass over the stored rows).
+    let solve = fixed.is_none();
+    let mut accumulate = |r: &[f64], y: f64, fw: f64| {
+        if solve {
+            for i in 0..k {
+                atb[i] += r[i] * (y - fw);
+                let ri = r[i];
+                for (a, &rj) in ata[i * k + i..(i + 1) * k].iter_mut().zip(&r[i..]) {
+                    *a += ri * rj;
+                }
+            }
+        }
+    };
+    let zeros = vec![0.0; k];
     let mut b = vec![0.0; k];
     let mut prev = vec![0.0; k];
     for c in cycles {
@@ -143,12 +175,14 @@ pub(super) fn force_fit(
         if !f_wd.is_zero() {
             quiet = quiet.min(c.reach.first_up);
         }
-        for j in 0..quiet {
+        let loud = &c.reach.loud;
+        for &j in &loud[..loud.partition_point(|&j| j < quiet)] {
             let y = c.f[j];
-            if j.abs_diff(half) > excl && y.is_finite() && y.abs() > 0.5 {
-                cols.extend(std::iter::repeat_n(0.0, k));
+            if j.abs_diff(half) > excl {
+                cols.extend_from_slice(&zeros);
                 ys.push(y);
                 fixed_part.push(0.0);
+                accumulate(&zeros, y, 0.0);
             }
         }
         let mut state = vec![0.0; k];
@@ -190,6 +224,7 @@ pub(super) fn force_fit(
                 cols.extend_from_slice(&state);
                 ys.push(y);
                 fixed_part.push(state_wd);
+                accumulate(&state, y, state_wd);
             }
         }
     }
@@ -197,16 +232,7 @@ pub(super) fn force_fit(
         Some(v) => v.to_vec(),
         None => {
             // The upper triangle only (the products are the same either
-            // way round), mirrored after.
-            for ((r, &y), &fw) in cols.chunks_exact(k).zip(&ys).zip(&fixed_part) {
-                for i in 0..k {
-                    atb[i] += r[i] * (y - fw);
-                    let ri = r[i];
-                    for (a, &rj) in ata[i * k + i..(i + 1) * k].iter_mut().zip(&r[i..]) {
-                        *a += ri * rj;
-                    }
-                }
-            }
+            // way round), mirrored here.
             for i in 0..k {
                 for j in 0..i {
                     ata[i * k + j] = ata[j * k + i];
@@ -233,11 +259,25 @@ pub(super) fn force_fit(
         }
     };
     let mut ss = 0.0;
-    for ((r, &y), &fw) in cols.chunks_exact(k).zip(&ys).zip(&fixed_part) {
+    for ((r, &y), &fw) in cols.chunks_exact(k).zip(ys.iter()).zip(fixed_part.iter()) {
         let pred: f64 = r.iter().zip(&vals).map(|(a, b)| a * b).sum::<f64>() + fw;
         ss += (y - pred).powi(2);
     }
-    (ss, vals, ys.len())
+    let count = ys.len();
+    FIT_SCRATCH.set(scratch);
+    (ss, vals, count)
+}
+
+/// The force objective's row buffers ([`force_fit`]), one set per thread.
+#[derive(Default)]
+struct Scratch {
+    cols: Vec<f64>,
+    ys: Vec<f64>,
+    fixed_part: Vec<f64>,
+}
+
+thread_local! {
+    static FIT_SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::new(Scratch::default());
 }
 
 /// The force fit's fixed inputs and its two searches: the calibration's
