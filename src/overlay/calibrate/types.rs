@@ -134,4 +134,4 @@ pub(super) const SCOUT_MARGIN: f64 = 1.25;
 /// and 0.04–0.09 µs: ~420 and ~270 evaluations of the whole force record
 /// per search, a quarter of a calibration's CPU; docs/rig-logs.md.)
 pub(super) const FORCE_TOL_STANDOFF_MM: f64 = 1e-4;
-pub(super) const FORCE_TOL_TAU_S: f64 = 1e-8;
+pub(super) const FORCE_TOL_TAU_S: f64 = 1e-7;
