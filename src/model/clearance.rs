@@ -574,6 +574,17 @@ impl JointModel<DIM> for ClearanceModel {
     fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; DIM], dy: &mut [f64; DIM]) {
         self.evaluate_in(mode, t, y, dy);
     }
+    /// The pin bar's own state gives both, as [`Self::rod_and_bar`]
+    /// computes them, except while the part holds the bar (the stick law):
+    /// the load then balances every other force.
+    fn stroke_and_process_in(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> (f64, f64) {
+        if mode.process == ProcessMode::Held {
+            let o = self.outputs_in(mode, t, y);
+            return (o.s, o.process_force);
+        }
+        let s = y[X4] - self.x4_tdc;
+        (s, self.process.force_in(mode.process, s, y[V4]))
+    }
     fn cached_end(&self, mode: Mode, t: f64, y: &[f64; DIM]) -> Option<Outputs> {
         self.end.get(t, y, mode)
     }

@@ -140,6 +140,14 @@ pub trait JointModel<const N: usize>: crate::solver::System<N> + Clone {
     fn accel_scale(&self) -> f64;
     /// Everything at one instant in a given contact mode.
     fn outputs_in(&self, mode: Mode, t: f64, y: &[f64; N]) -> Outputs;
+    /// The stroke s (m from top dead centre) and the process force (N) at
+    /// one instant in a given contact mode: the [`Outputs::s`] and
+    /// [`Outputs::process_force`] of [`JointModel::outputs_in`], which a
+    /// model may compute without the rest.
+    fn stroke_and_process_in(&self, mode: Mode, t: f64, y: &[f64; N]) -> (f64, f64) {
+        let o = self.outputs_in(mode, t, y);
+        (o.s, o.process_force)
+    }
     /// The right-hand side in a given contact mode.
     fn rhs_in(&self, mode: Mode, t: f64, y: &[f64; N], dy: &mut [f64; N]);
     /// When the crank is free (a motor drives it): its speed ω2 less the

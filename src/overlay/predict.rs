@@ -369,6 +369,8 @@ pub fn predict(
         // Only the curves are used: the summary's peaks and time averages
         // would cost a tenth of the run for nothing.
         figures: false,
+        // Only the stroke and the process force are read below.
+        lean_curves: true,
         ..SimOptions::default()
     };
     let r = simulate(&p, &so, progress)?;

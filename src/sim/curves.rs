@@ -126,6 +126,14 @@ impl Curves {
         self.slip_mps.push(nan_unless(o.v_slip));
     }
 
+    /// One grid point of a lean run ([`super::SimOptions::lean_curves`]):
+    /// the stroke and the process force only, as [`Curves::push`] writes
+    /// them (s in m, the force on the bar in N).
+    pub fn push_lean(&mut self, s: f64, process_force: f64) {
+        self.stroke_mm.push(s * 1e3);
+        self.process_force_n.push(-process_force);
+    }
+
     /// The columns in CSV order.
     pub fn columns(&self) -> [&[f64]; 14] {
         [

@@ -109,6 +109,15 @@ pub struct SimOptions {
     /// Off, those figures read NaN. Not a user setting (never serialised).
     #[serde(skip, default = "figures_on")]
     pub figures: bool,
+    /// Sample only the stroke and the process force on the crank-angle
+    /// grid ([`Curves::push_lean`]: the other columns stay empty). The
+    /// calibration's and the overlay's predictions read nothing else, and a
+    /// full evaluation of the model at each of the 720 points of every
+    /// revolution (the joint's forces, the rod, the ideal mechanism beside)
+    /// was a tenth of a calibration. The same numbers either way. Not a
+    /// user setting (never serialised).
+    #[serde(skip)]
+    pub lean_curves: bool,
 }
 
 fn figures_on() -> bool {
@@ -153,6 +162,7 @@ impl Default for SimOptions {
             max_wall_s: 300.0,
             record_events: false,
             figures: true,
+            lean_curves: false,
         }
     }
 }

@@ -128,8 +128,10 @@ pub(super) const SCOUT_MARGIN: f64 = 1.25;
 
 /// Tolerances of the force fit's searches (each nested: the standoff
 /// inside, the load cell's lag outside; Brent's method, whose bracket ends
-/// within about four times these): 0.1 µm of standoff and 0.01 µs of lag,
-/// far under a fiftieth of their σ (~0.02 mm, several µs).
+/// within about four times these): 0.1 µm of standoff and 0.1 µs of lag,
+/// far under a fiftieth of their σ (~0.02 mm; the lag's is tens of µs,
+/// 80–170 µs on the trend benchmark's logs). The lag's was 0.01 µs until
+/// the tenth round: 28 % more evaluations for digits below its noise.
 /// (They were golden sections of 19 and 15 iterations, brackets of 0.4 µm
 /// and 0.04–0.09 µs: ~420 and ~270 evaluations of the whole force record
 /// per search, a quarter of a calibration's CPU; docs/rig-logs.md.)

@@ -109,10 +109,17 @@ impl<M: JointModel<N>, const N: usize> Runner<'_, M, N> {
                     prepared = true;
                 }
                 let y = if tg == tb { *y_b } else { self.st.dense(tg) };
-                let o = self.model.outputs_in(mode, tg, &y);
-                self.aux_evals += 1;
-                if let Some(c) = self.curves.as_mut() {
-                    c.push(&o, true);
+                if self.opts.lean_curves {
+                    let (s, f) = self.model.stroke_and_process_in(mode, tg, &y);
+                    if let Some(c) = self.curves.as_mut() {
+                        c.push_lean(s, f);
+                    }
+                } else {
+                    let o = self.model.outputs_in(mode, tg, &y);
+                    self.aux_evals += 1;
+                    if let Some(c) = self.curves.as_mut() {
+                        c.push(&o, true);
+                    }
                 }
                 self.grid_next += 1;
             }
