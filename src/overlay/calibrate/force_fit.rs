@@ -111,7 +111,11 @@ pub(super) fn force_fit(
             out[k - 1] = 1.0;
             return;
         }
-        let i = knots_mm.partition_point(|&x| x <= d).max(1);
+        // The first knot above d, by a scan from the start: d moves
+        // through the knots in order along a stroke, so the scan's
+        // branches are predicted where a binary search's are not (the
+        // same index as `partition_point`).
+        let i = knots_mm.iter().position(|&x| x > d).unwrap_or(k).max(1);
         let w = (d - knots_mm[i - 1]) / (knots_mm[i] - knots_mm[i - 1]);
         out[i - 1] = 1.0 - w;
         out[i] = w;
@@ -138,10 +142,15 @@ pub(super) fn force_fit(
     let solve = fixed.is_none();
     let mut accumulate = |r: &[f64], y: f64, fw: f64| {
         if solve {
-            for i in 0..k {
-                atb[i] += r[i] * (y - fw);
-                let ri = r[i];
-                for (a, &rj) in ata[i * k + i..(i + 1) * k].iter_mut().zip(&r[i..]) {
+            let e = y - fw;
+            for (i, ((ri, bi), row)) in r
+                .iter()
+                .zip(atb.iter_mut())
+                .zip(ata.chunks_exact_mut(k))
+                .enumerate()
+            {
+                *bi += ri * e;
+                for (a, &rj) in row[i..].iter_mut().zip(&r[i..]) {
                     *a += ri * rj;
                 }
             }
@@ -210,11 +219,12 @@ pub(super) fn force_fit(
             } else {
                 b.iter_mut().for_each(|x| *x = 0.0);
             }
-            for i in 0..k {
-                state[i] = ea * state[i] + b0 * prev[i] + b1 * b[i];
+            for ((st, &p), &bi) in state.iter_mut().zip(prev.iter()).zip(b.iter()) {
+                *st = ea * *st + b0 * p + b1 * bi;
             }
             state_wd = ea * state_wd + b0 * prev_wd + b1 * wd;
-            prev.copy_from_slice(&b);
+            // `b` is written whole at the next sample.
+            std::mem::swap(&mut prev, &mut b);
             prev_wd = wd;
             let y = c.f[j];
             // Samples that carry information: force expected or measured, away from BDC.

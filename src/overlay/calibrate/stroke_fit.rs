@@ -78,7 +78,12 @@ pub(super) fn curves_windowed(rows: &[&[f64]], n: usize, w: usize) -> Curves {
         sds.clear();
         for &a in &starts {
             column.clear();
-            column.extend(rows[a..a + w].iter().map(|row| row[j]).filter(|x| x.is_finite()));
+            column.extend(
+                rows[a..a + w]
+                    .iter()
+                    .map(|row| row[j])
+                    .filter(|x| x.is_finite()),
+            );
             // NaN: fewer than two finite values in the window.
             let sd = sd_of_finite(&column);
             if sd.is_finite() {
