@@ -1,7 +1,7 @@
 //! The envelope generator's own checks.
 
 use super::*;
-use crate::vision::{InspectOptions, Inspection, inspect_gray};
+use crate::vision::{InspectOptions, Inspection, Verdict, inspect_gray};
 
 /// Renders case `seed` and inspects its image with the case's recipe and
 /// the default options (a failed render or inspection fails the test).
