@@ -33,7 +33,7 @@
 use crate::cli::common::{outln, outp};
 use crate::engine::process::{learn_from_logs, monitor_logs};
 use crate::plant::monitor::{MonitorOutputs, exit_status, monitor_folder};
-use crate::plant::partial::{Header, Job};
+use crate::plant::partial::Job;
 use crate::plant::shard::{Shard, split_list};
 use crate::process::ProcessRecipe;
 use crate::process::report::{cycles_csv, summary_text};
@@ -160,13 +160,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 serde_json::to_string(&outputs).unwrap_or_default(),
             );
             (
-                Header::new(
-                    Job::Monitor,
-                    shard,
-                    part.units,
-                    part.digest.clone(),
-                    &settings,
-                ),
+                part.header(Job::Monitor, shard, &settings),
                 part.orders.as_slice(),
             )
         });

@@ -6,7 +6,7 @@
 
 use super::common::{ParamArgs, parse_list_f64};
 use crate::cli::common::outln;
-use crate::plant::partial::{Header, Job};
+use crate::plant::partial::Job;
 use crate::plant::shard::{Shard, split_list};
 use crate::plant::sweep::{case_units, sweep_folder};
 use crate::progress::{Progress, ProgressBarGuard};
@@ -112,13 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             !args.no_charts
         );
         (
-            Header::new(
-                Job::Sweep,
-                shard,
-                part.units,
-                part.digest.clone(),
-                &settings,
-            ),
+            part.header(Job::Sweep, shard, &settings),
             part.orders.as_slice(),
         )
     });

@@ -319,14 +319,29 @@ impl MotorDrive {
         }
     }
 
-    /// Error scales of the drive's controlled states (θ2 at `theta_scale`
-    /// rad, ω2 relative, the integrator against the stall torque).
-    pub fn scales(&self, theta_scale: Scale) -> [Scale; 3] {
+    /// Fills the drive's part (from state index `base`) of a model's
+    /// tolerance: the error scales of its controlled states (θ2 at
+    /// `theta_scale` rad, ω2 relative, the integrator against the stall
+    /// torque) and the absolute tolerance `atol` (m) on θ2 and ω2 through
+    /// the crank length `r` (m).
+    pub fn fill_tolerance<const DIM: usize>(
+        &self,
+        base: usize,
+        theta_scale: Scale,
+        atol: f64,
+        r: f64,
+        scale: &mut [Scale; DIM],
+        at: &mut [f64; DIM],
+    ) {
         let t_ref = match &self.curve {
             Curve::Linear { stall, .. } => *stall,
             Curve::Table(t) => t.points.iter().map(|p| p.1.abs()).fold(0.0, f64::max),
         };
-        [theta_scale, Scale::Relative, Scale::Fixed(t_ref.max(1e-9))]
+        scale[base + D_THETA2] = theta_scale;
+        scale[base + D_OMEGA2] = Scale::Relative;
+        scale[base + D_PI] = Scale::Fixed(t_ref.max(1e-9));
+        at[base + D_THETA2] = atol / r;
+        at[base + D_OMEGA2] = atol / r;
     }
 }
 

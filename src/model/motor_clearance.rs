@@ -164,14 +164,9 @@ impl JointModel<DIM> for MotorClearanceModel {
         scale[..6].copy_from_slice(&inner.scale);
         at[..6].copy_from_slice(&inner.atol);
         // θ2 at the clearance's scale through the crank length.
-        let [a, b, c] = self
-            .drive
-            .scales(Scale::Fixed(self.inner.clearance.max(1e-9) / r));
-        scale[THETA2] = a;
-        scale[OMEGA2] = b;
-        scale[BASE + D_PI] = c;
-        at[THETA2] = atol / r;
-        at[OMEGA2] = atol / r;
+        let theta_scale = Scale::Fixed(self.inner.clearance.max(1e-9) / r);
+        self.drive
+            .fill_tolerance(BASE, theta_scale, atol, r, &mut scale, &mut at);
         Tolerance {
             rtol,
             atol: at,

@@ -107,12 +107,8 @@ impl JointModel<DIM> for RigidMotorModel {
         let r = self.geom.r;
         let mut scale = [Scale::Ignore; DIM];
         let mut at = [0.0; DIM];
-        let [a, b, c] = self.drive.scales(Scale::Relative);
-        scale[THETA2] = a;
-        scale[OMEGA2] = b;
-        scale[BASE + D_PI] = c;
-        at[THETA2] = atol / r;
-        at[OMEGA2] = atol / r;
+        self.drive
+            .fill_tolerance(BASE, Scale::Relative, atol, r, &mut scale, &mut at);
         Tolerance {
             rtol,
             atol: at,

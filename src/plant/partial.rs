@@ -10,7 +10,7 @@
 //! left from another run is refused, naming it, before anything is
 //! written.
 
-use super::shard::Shard;
+use super::shard::{Part, Shard};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -81,6 +81,14 @@ impl Header {
             settings: sha256_hex(settings.as_bytes()),
             settings_text: shorten(settings),
         }
+    }
+}
+
+impl<T> Part<T> {
+    /// The header of this shard's partial for `job`: the whole list's
+    /// identity (its units and digest) with the job's `settings`.
+    pub fn header(&self, job: Job, shard: Shard, settings: &str) -> Header {
+        Header::new(job, shard, self.units, self.digest.clone(), settings)
     }
 }
 

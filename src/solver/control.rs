@@ -77,11 +77,16 @@ impl PiControl {
         h / (1.0 / self.fac1).min(fac11 / self.safe)
     }
 
-    /// The retry after a step that left the finite numbers: as small as
-    /// the controller allows.
-    pub(crate) fn reject_non_finite(&mut self, h: f64) -> f64 {
+    /// The retry after a step at `t` that left the finite numbers: as
+    /// small as the controller allows; `NonFinite` once that step is lost
+    /// in the round-off of `t`.
+    pub(crate) fn reject_non_finite(&mut self, h: f64, t: f64) -> Result<f64, StepError> {
         self.rejected_last = true;
-        h * self.fac1
+        let h = h * self.fac1;
+        if h <= t.abs() * f64::EPSILON * 10.0 {
+            return Err(StepError::NonFinite { t });
+        }
+        Ok(h)
     }
 }
 

@@ -154,10 +154,7 @@ impl<const N: usize> Dop853<N> {
             }
             if !err.is_finite() || !all_finite(&ynew) {
                 self.stats.rejected += 1;
-                h = self.ctl.reject_non_finite(h);
-                if h <= t.abs() * f64::EPSILON * 10.0 {
-                    return Err(StepError::NonFinite { t });
-                }
+                h = self.ctl.reject_non_finite(h, t)?;
                 continue;
             }
             let (fac11, hnew) = self

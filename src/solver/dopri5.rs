@@ -144,10 +144,7 @@ impl<const N: usize> Dopri5<N> {
                 if !all_finite(&y1) && h < 1e-300 {
                     return Err(StepError::NonFinite { t });
                 }
-                h = self.ctl.reject_non_finite(h);
-                if h <= t.abs() * f64::EPSILON * 10.0 {
-                    return Err(StepError::NonFinite { t });
-                }
+                h = self.ctl.reject_non_finite(h, t)?;
                 continue;
             }
             let (fac11, hnew) = self

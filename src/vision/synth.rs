@@ -17,7 +17,6 @@
 
 use super::gray::{Gray, GrayData};
 use super::recipe::{PinShape, Polarity, Recipe, View};
-use super::result::{PinStatus, Verdict};
 use super::truth::{Truth, TruthExtra, TruthPin};
 
 /// The image generator's random numbers (see [`crate::rng`]).
@@ -610,12 +609,7 @@ impl Scene {
             height: self.height,
             data,
         };
-        let verdict =
-            if truth_pins.iter().all(|p| p.defect == PinStatus::Ok) && truth_extras.is_empty() {
-                Verdict::Pass
-            } else {
-                Verdict::Fail
-            };
+        let verdict = Truth::verdict_of(&truth_pins, &truth_extras);
         let truth = Truth {
             recipe: String::new(),
             mm_per_px: Some(self.mm_per_px),

@@ -122,6 +122,16 @@ impl Truth {
         serde_json::from_str(text).map_err(|e| e.to_string())
     }
 
+    /// The verdict a connector with these pins and counted extras
+    /// deserves: pass when every pin is ok and there is no extra.
+    pub fn verdict_of(pins: &[TruthPin], extras: &[TruthExtra]) -> Verdict {
+        if pins.iter().all(|p| p.defect == PinStatus::Ok) && extras.is_empty() {
+            Verdict::Pass
+        } else {
+            Verdict::Fail
+        }
+    }
+
     /// Render noise σ (DN) when the file records it.
     pub fn noise_sigma(&self) -> Option<f64> {
         self.render.as_ref()?.get("noise_sigma_dn")?.as_f64()

@@ -122,6 +122,29 @@ impl SigBuf {
         self.push(t, n, src);
     }
 
+    /// The start and spacing of a block message logged at `log_time`
+    /// (`t` as a signed time), counting the block and, when its `t0_ns`
+    /// is not the log time, the mismatch; `None` (counted out of range)
+    /// when either does not fit a signed time.
+    pub(super) fn block_times(
+        &mut self,
+        t: i64,
+        log_time: u64,
+        t0_ns: u64,
+        dt_ns: u64,
+    ) -> Option<(i64, i64)> {
+        let (Ok(t0), Ok(dt)) = (i64::try_from(t0_ns), i64::try_from(dt_ns)) else {
+            self.time_out_of_range += 1;
+            return None;
+        };
+        self.blocks += 1;
+        if t0_ns != log_time {
+            self.block_time_mismatch += 1;
+            self.block_time_mismatch_first.get_or_insert((t, t0));
+        }
+        Some((t0, dt))
+    }
+
     pub(super) fn wrong_shape_at(&mut self, t: i64, why: &str) {
         self.wrong_shape += 1;
         if self.wrong_shape_first.is_none() {

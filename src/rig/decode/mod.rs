@@ -189,47 +189,26 @@ impl DecodeOut {
                 if let Some(title) = title
                     && title != src.field
                 {
-                    b.wrong_shape += 1;
-                    if b.wrong_shape_first.is_none() {
-                        b.wrong_shape_first = Some((
-                            t,
-                            format!(
-                                "block schema title is '{title}', the map expects field '{}'",
-                                src.field
-                            ),
-                        ));
-                    }
+                    b.wrong_shape_at(
+                        t,
+                        &format!(
+                            "block schema title is '{title}', the map expects field '{}'",
+                            src.field
+                        ),
+                    );
                     continue;
                 }
                 let (Some(t0v), Some(dtv), Some(Val::Array(arr))) = (t0, dt, values) else {
-                    b.wrong_shape += 1;
-                    if b.wrong_shape_first.is_none() {
-                        b.wrong_shape_first = Some((
-                            t,
-                            "block message without t0_ns, dt_ns and a values array".into(),
-                        ));
-                    }
+                    b.wrong_shape_at(t, "block message without t0_ns, dt_ns and a values array");
                     continue;
                 };
                 let (Some(t0n), Some(dtn)) = (t0v.u64(), dtv.u64()) else {
-                    b.wrong_shape += 1;
-                    if b.wrong_shape_first.is_none() {
-                        b.wrong_shape_first =
-                            Some((t, "block t0_ns / dt_ns are not unsigned integers".into()));
-                    }
+                    b.wrong_shape_at(t, "block t0_ns / dt_ns are not unsigned integers");
                     continue;
                 };
-                let (Ok(t0i), Ok(dti)) = (i64::try_from(t0n), i64::try_from(dtn)) else {
-                    b.time_out_of_range += 1;
+                let Some((t0i, dti)) = b.block_times(t, log_time, t0n, dtn) else {
                     continue;
                 };
-                b.blocks += 1;
-                if t0n != log_time {
-                    b.block_time_mismatch += 1;
-                    if b.block_time_mismatch_first.is_none() {
-                        b.block_time_mismatch_first = Some((t, t0i));
-                    }
-                }
                 let mut k: i64 = 0;
                 let r = json::for_each_element(arr, |v| {
                     let ts = t0i.saturating_add(dti.saturating_mul(k));
@@ -302,15 +281,9 @@ impl DecodeOut {
                         b.wrong_shape_at(t, "block message without t0_ns and dt_ns");
                         continue;
                     };
-                    let (Ok(t0i), Ok(dti)) = (i64::try_from(t0n), i64::try_from(dtn)) else {
-                        b.time_out_of_range += 1;
+                    let Some((t0i, dti)) = b.block_times(t, log_time, t0n, dtn) else {
                         continue;
                     };
-                    b.blocks += 1;
-                    if t0n != log_time {
-                        b.block_time_mismatch += 1;
-                        b.block_time_mismatch_first.get_or_insert((t, t0i));
-                    }
                     for (k, v) in values.iter().enumerate() {
                         let ts = t0i.saturating_add(dti.saturating_mul(k as i64));
                         b.push_f64(ts, v.f64(), &s.src);
@@ -525,14 +498,16 @@ mod tests {
         assert_eq!(d.counts[1].messages, 4);
     }
 
+    /// A decoder of block messages on channel 1 (schema title `title`)
+    /// for the force field `force_n`.
+    fn force_block_decoder(title: &str) -> Decoder {
+        let p = plans_for(Shape::Block, Some(title), &[(SignalKind::Force, "force_n")]);
+        Decoder::new(Arc::new(p), 0)
+    }
+
     #[test]
     fn block_messages_expand_and_check_title() {
-        let p = plans_for(
-            Shape::Block,
-            Some("force_n"),
-            &[(SignalKind::Force, "force_n")],
-        );
-        let mut d = Decoder::new(Arc::new(p), 0);
+        let mut d = force_block_decoder("force_n");
         d.message(
             1,
             1000,
@@ -547,12 +522,7 @@ mod tests {
         assert_eq!(f.invalid.nan_token, 1);
         assert_eq!(f.blocks, 2);
         assert_eq!(f.block_time_mismatch, 1);
-        let p2 = plans_for(
-            Shape::Block,
-            Some("displacement_mm"),
-            &[(SignalKind::Force, "force_n")],
-        );
-        let mut d2 = Decoder::new(Arc::new(p2), 0);
+        let mut d2 = force_block_decoder("displacement_mm");
         d2.message(
             1,
             1000,

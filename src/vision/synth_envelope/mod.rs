@@ -30,7 +30,7 @@ use super::envelope as env;
 use super::fit::Similarity;
 use super::gray::{Gray, GrayData, ImageInfo};
 use super::recipe::{ExtrasRule, PinShape, Polarity, Recipe, Tolerance, View};
-use super::result::{PinStatus, Verdict};
+use super::result::PinStatus;
 use super::synth::{Damage, Rng, Shape};
 use super::truth::{Truth, TruthExtra, TruthPin};
 use serde::Serialize;

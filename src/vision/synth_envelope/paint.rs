@@ -218,12 +218,7 @@ impl EnvelopeCase {
             blur(&mut img, w, h, f.blur_px);
         }
         let (gray, info) = self.expose(&img)?;
-        let verdict =
-            if truth_pins.iter().all(|p| p.defect == PinStatus::Ok) && truth_extras.is_empty() {
-                Verdict::Pass
-            } else {
-                Verdict::Fail
-            };
+        let verdict = Truth::verdict_of(&truth_pins, &truth_extras);
         let truth = Truth {
             recipe: self.recipe.part_number.clone(),
             mm_per_px: Some(f.mm_per_px),

@@ -1,6 +1,21 @@
 //! The envelope generator's own checks.
 
 use super::*;
+use crate::vision::{InspectOptions, Inspection, Verdict, inspect_gray};
+
+/// Renders case `seed` and inspects its image with the case's recipe and
+/// the default options (a failed render or inspection fails the test).
+fn render_and_inspect(c: &EnvelopeCase, seed: u64) -> (Rendered, Inspection) {
+    let r = c.render().unwrap();
+    let ins = inspect_gray(
+        &c.recipe,
+        &r.gray,
+        r.info.clone(),
+        &InspectOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+    (r, ins)
+}
 
 #[test]
 fn draws_stay_inside_the_envelope_and_parts_fit() {
@@ -118,7 +133,6 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
     // light beside the near side of the hole used to pull the measured
     // centre outward by 0.2–0.4 px (ok pins called bent); the model of the
     // tip in its hole (`blur_tip`) measures it where it is.
-    use crate::vision::{InspectOptions, inspect_gray};
     let mut checked = 0;
     let (mut worst, mut worst_band): (f64, f64) = (0.0, 0.0);
     for seed in 0..60 {
@@ -138,14 +152,7 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
             let a = 2.399 * (i as f64 + seed as f64);
             p.offset_mm = (0.8 * tol * a.cos(), 0.8 * tol * a.sin());
         }
-        let r = c.render().unwrap();
-        let ins = inspect_gray(
-            &c.recipe,
-            &r.gray,
-            r.info.clone(),
-            &InspectOptions::default(),
-        )
-        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let (r, ins) = render_and_inspect(&c, seed);
         let cmp = r.compare(&c.factors, &ins);
         assert!(
             cmp.status_mismatches.is_empty(),
@@ -176,7 +183,6 @@ fn blurred_tips_off_centre_in_their_holes_are_measured_where_they_are() {
 
 #[test]
 fn a_side_view_with_every_pin_missing_is_a_failed_connector() {
-    use crate::vision::{InspectOptions, inspect_gray};
     let mut checked = 0;
     for seed in 0..40 {
         let mut c = EnvelopeCase::draw_with(seed, SizeClass::Small, Some(View::Side));
@@ -187,14 +193,7 @@ fn a_side_view_with_every_pin_missing_is_a_failed_connector() {
             p.present = false;
         }
         c.extras.clear();
-        let r = c.render().unwrap();
-        let ins = inspect_gray(
-            &c.recipe,
-            &r.gray,
-            r.info.clone(),
-            &InspectOptions::default(),
-        )
-        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let (_, ins) = render_and_inspect(&c, seed);
         assert_eq!(ins.verdict, Verdict::Fail, "seed {seed}");
         assert!(
             ins.pins.iter().all(|p| p.status == PinStatus::Missing),
