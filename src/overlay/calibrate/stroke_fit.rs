@@ -155,7 +155,8 @@ pub(super) fn stroke_objective(
     };
     // Spread part.
     let mut js = 0.0;
-    let mut rs = Vec::new();
+    // The residuals' sums of squares and counts, for their RMS.
+    let (mut rs2, mut rs_n) = (0.0, 0usize);
     for j in 0..n {
         let (sm, sp) = (m.spread[j], p.spread[j]);
         if !sm.is_finite() || !sp.is_finite() {
@@ -164,7 +165,8 @@ pub(super) fn stroke_objective(
         let pred = (sp * sp + noise * noise).sqrt();
         let v = var_s(j) + p.var_spread[j] + floor;
         js += (sm - pred).powi(2) / v;
-        rs.push(sm - pred);
+        rs2 += (sm - pred) * (sm - pred);
+        rs_n += 1;
     }
     // Mean part: r = M + Δz − P + ψ·P′, weighted; solve the 2×2 normal equations.
     let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -190,14 +192,15 @@ pub(super) fn stroke_objective(
         (b1 / a11.max(1e-300), 0.0)
     };
     let mut jm = 0.0;
-    let mut rm = Vec::new();
+    let (mut rm2, mut rm_n) = (0.0, 0usize);
     for (w, y, dp) in pts {
         let r = y - dz - psi * dp;
         jm += w * r * r;
-        rm.push(r);
+        rm2 += r * r;
+        rm_n += 1;
     }
-    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt();
-    (js + jm, dz, psi, rms(&rs), rms(&rm))
+    let rms = |ss: f64, n: usize| (ss / n.max(1) as f64).sqrt();
+    (js + jm, dz, psi, rms(rs2, rs_n), rms(rm2, rm_n))
 }
 
 /// The grid with its fine nodes (clearances `fine`, at least 4 in a row)
