@@ -306,3 +306,86 @@ fn foreign_and_broken_logs_are_listed_with_their_errors() {
         "{md}"
     );
 }
+
+/// Two heads in one run, from synthetic logs: head A wears (the default
+/// law), head B does not (rate 0, its clearance 0.3 mm throughout). Each
+/// is its own trend (`by_rig`); B's says there is no wear the data can
+/// show and gives no forecast, A's still has one. The truth is the
+/// generator's input.
+#[test]
+fn a_second_head_that_does_not_wear_is_told_apart_from_one_that_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = WearSeries {
+        logs: 5,
+        seed: 11,
+        ..WearSeries::default()
+    };
+    let b = WearSeries {
+        rig_id: "head-B".into(),
+        logs: 5,
+        seed: 12,
+        c0_mm: 0.3,
+        rate_mm_per_cycle: 0.0,
+        ..WearSeries::default()
+    };
+    let (dir_a, dir_b) = (dir.path().join("a"), dir.path().join("b"));
+    std::fs::create_dir_all(&dir_a).unwrap();
+    std::fs::create_dir_all(&dir_b).unwrap();
+    let logs_a = a.write(&dir_a).unwrap();
+    let logs_b = b.write(&dir_b).unwrap();
+    assert!(logs_b.iter().all(|l| l.clearance_mm == 0.3));
+    let inputs: Vec<_> = logs_a
+        .iter()
+        .chain(&logs_b)
+        .map(|l| l.path.clone())
+        .collect();
+    let opts = TrendOptions {
+        limit_mm: Some(0.8),
+        ..TrendOptions::default()
+    };
+    let r = run_trend(
+        &inputs,
+        &opts,
+        &mut TrendCache::default(),
+        &Progress::hidden(),
+    );
+    assert!(r.errors.is_empty(), "{:?}", r.errors);
+    assert_eq!(r.heads.len(), 2);
+    let head = |id: &str| r.heads.iter().find(|h| h.rig == id).unwrap();
+    let (ha, hb) = (head("head-A"), head("head-B"));
+    assert_eq!((ha.points.len(), hb.points.len()), (5, 5));
+    for (p, l) in hb.points.iter().zip(&logs_b) {
+        eprintln!(
+            "  head-B n {:>8.0}: true {:.4} calibrated {:.4} ± {:.4}",
+            l.head_cycles, l.clearance_mm, p.clearance_mm, p.u95_mm
+        );
+    }
+    let fb = hb.fit.as_ref().unwrap();
+    eprintln!(
+        "head-B: rate {:e} [{:e}, {:e}]; {}",
+        fb.slope, fb.slope_lo95, fb.slope_hi95, hb.verdict
+    );
+    assert!(
+        fb.slope_lo95 <= 0.0 && 0.0 <= fb.slope_hi95,
+        "the true rate 0 is outside head B's 95 % interval [{:e}, {:e}]",
+        fb.slope_lo95,
+        fb.slope_hi95
+    );
+    assert!(
+        hb.verdict.starts_with("no wear the data can show"),
+        "{}",
+        hb.verdict
+    );
+    assert!(hb.forecast.is_err());
+    let fa = ha.fit.as_ref().unwrap();
+    eprintln!(
+        "head-A: rate {:e} [{:e}, {:e}] (true {:e}); {}",
+        fa.slope, fa.slope_lo95, fa.slope_hi95, a.rate_mm_per_cycle, ha.verdict
+    );
+    assert!(fa.slope_lo95 > 0.0, "head A's wear is not told from none");
+    assert!(
+        fa.slope_lo95 <= a.rate_mm_per_cycle && a.rate_mm_per_cycle <= fa.slope_hi95,
+        "the true rate is outside head A's interval"
+    );
+    assert!(ha.forecast.is_ok());
+}
