@@ -93,16 +93,19 @@ pub struct CoarseSearch {
 
 /// Runs the coarse search. `pin_px` is the expected tip width in pixels;
 /// blobs outside `[min_area, max_area]` (in tip areas) or wider than
-/// `max_dim` tips are dropped (housing structure, noise).
+/// `max_dim` tips are dropped (housing structure, noise). `expected_tips`,
+/// the number of pins the recipe has, bounds how many blobs the typical
+/// tip contrast is read from (see [`search_coarse_expecting`]).
 pub fn coarse_search<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     pin_px: f64,
     mask: Option<&dyn Fn(usize, usize) -> bool>,
+    expected_tips: Option<usize>,
 ) -> CoarseSearch {
     let k = coarse_factor(pin_px);
     let coarse = Coarse::build(plane, k, sign);
-    let f = search_coarse(&coarse, pin_px, mask);
+    let f = search_coarse_expecting(&coarse, pin_px, mask, expected_tips);
     CoarseSearch {
         coarse,
         tophat: f.tophat,
@@ -131,6 +134,25 @@ pub fn search_coarse(
     coarse: &Coarse,
     pin_px: f64,
     mask: Option<&dyn Fn(usize, usize) -> bool>,
+) -> Found {
+    search_coarse_expecting(coarse, pin_px, mask, None)
+}
+
+/// [`search_coarse`] for a part of `expected_tips` pins: the typical tip
+/// contrast is the median peak of the strongest `expected_tips` tip-sized
+/// blobs rather than of all of them. The tips are the scene's strongest
+/// blobs, but a textured fixture can hold many more tip-sized blobs than
+/// the part has pins (a grainy backdrop around a 1 × 17 part: 71 of them);
+/// their median is then the texture's contrast, the threshold (0.35 of it)
+/// lets the texture in, and its blobs, on the tips' lattice by chance,
+/// read as pins of a larger part ("pins outside the recipe's positions").
+/// Without a count (the scale search, which tries widths it does not yet
+/// know the part's pins at) every tip-sized blob is counted.
+pub fn search_coarse_expecting(
+    coarse: &Coarse,
+    pin_px: f64,
+    mask: Option<&dyn Fn(usize, usize) -> bool>,
+    expected_tips: Option<usize>,
 ) -> Found {
     let k = coarse.k;
     let pin_c = pin_px / k as f64;
@@ -172,6 +194,10 @@ pub fn search_coarse(
         })
         .map(|b| b.peak as f64)
         .collect();
+    if let Some(n) = expected_tips.filter(|&n| n >= 1 && peaks.len() > n) {
+        peaks.sort_by(|a, b| b.total_cmp(a));
+        peaks.truncate(n);
+    }
     let tip_contrast = super::grid::median(&mut peaks)
         .map(|v| v as f32)
         .unwrap_or_else(|| tophat.iter().cloned().fold(0f32, f32::max));
@@ -296,4 +322,41 @@ pub(crate) fn check_contrast(
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Four tips (peak 100) in a field of twenty fainter tip-sized texture
+    /// blobs (peak 20): counted over every blob, the typical contrast is the
+    /// texture's and the texture passes the threshold; counted over the four
+    /// strongest (the part has four pins), it is the tips' and only the tips
+    /// remain.
+    #[test]
+    fn texture_that_outnumbers_the_tips_does_not_set_their_contrast() {
+        let (w, h) = (240usize, 160usize);
+        let mut data = vec![0f32; w * h];
+        let mut square = |x0: usize, y0: usize, v: f32| {
+            for y in y0..y0 + 6 {
+                for x in x0..x0 + 6 {
+                    data[y * w + x] = v;
+                }
+            }
+        };
+        for i in 0..4 {
+            square(20 + 50 * i, 20, 100.0);
+        }
+        for i in 0..20 {
+            square(10 + 22 * (i % 10), 70 + 40 * (i / 10), 20.0);
+        }
+        let coarse = Coarse { w, h, k: 1, data };
+        let all = search_coarse(&coarse, 6.0, None);
+        assert!(all.tip_contrast < 30.0, "{}", all.tip_contrast);
+        assert_eq!(all.blobs.len(), 24);
+        let four = search_coarse_expecting(&coarse, 6.0, None, Some(4));
+        assert!(four.tip_contrast > 90.0, "{}", four.tip_contrast);
+        assert_eq!(four.blobs.len(), 4);
+        assert!(four.blobs.iter().all(|b| b.peak > 90.0));
+    }
 }

@@ -84,7 +84,7 @@ pub fn inspect_top<P: Px>(
         }
     };
     let s0 = pin_px0 / recipe.pin_mm;
-    let cs = detect::coarse_search(plane, sign, pin_px0, None);
+    let cs = detect::coarse_search(plane, sign, pin_px0, None, Some(recipe.positions().len()));
     detect::check_contrast(&cs.coarse, full_scale)?;
     let blobs = measure_candidates(plane, sign, &cs, pin_px0, opts);
     let tip_px0 = recipe.tip_area_mm2() * s0 * s0;
