@@ -5,15 +5,18 @@
 //! what the frame can hold down to 3.5 px (stopping once every position has
 //! its neighbour at the pitch). For each, the coarse search
 //! ([`super::detect::search_coarse`]) runs with that tip width, the blobs of
-//! about a tip's area (0.3–3 tips) are kept, and the candidate scores the
-//! blobs whose nearest neighbour along a row or a column (within ±12°) is
+//! about a tip's area (0.3–3 tips) and not touching the frame's edge are
+//! kept, and the candidate scores the blobs whose nearest neighbour along a
+//! row or a column (within ±12°) is
 //! at the recipe's pitch *for that tip width* (pitch / pin_mm × width,
 //! ±15 %), minus those whose nearest is at half that pitch (a lattice of every
 //! other pin is not the lattice). Only candidates whose matched blobs reach
 //! 0.35 of the strongest candidate's top-hat peak count (the tips are the
 //! scene's strongest blobs; fixture texture forms lattices too), and only a
-//! tip-strong one stops the ladder early. The best candidate's matched spacings
-//! give the pitch in pixels (median), hence the scale; its blobs' median
+//! tip-strong one stops the ladder early. Equal scores go to the
+//! candidate whose matched blobs stand stronger (a tip peaks in the top-hat
+//! at its own width). The best candidate's matched spacings give the pitch
+//! in pixels (median), hence the scale; its blobs' median
 //! size must agree with the tip width the pitch implies (a factor of 2 at
 //! most; blur and threshold widen a blob), which is the cross-check that
 //! the lattice found is made of tips.
@@ -67,6 +70,18 @@ fn width_of_area(a: f64, shape: PinShape) -> f64 {
     }
 }
 
+/// A blob touching the frame's edge is no whole tip (the part lies inside
+/// the frame), and the top-hat leaves a ridge along an edge the image
+/// rises towards (vignetting in a dark-polarity image, a gradient): noise
+/// cuts that ridge into blobs evenly spaced along the edge, a lattice at
+/// whatever width is tried, which ended the ladder at 2.5–5 × the tip.
+fn touches_frame(b: &super::label::Blob, coarse: &Coarse) -> bool {
+    b.x_min == 0
+        || b.y_min == 0
+        || b.x_max as usize + 1 >= coarse.w
+        || b.y_max as usize + 1 >= coarse.h
+}
+
 fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
     let found = detect::search_coarse(coarse, w, None);
     let k = coarse.k as f64;
@@ -81,10 +96,11 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             let a = b.blob.area as f64 * k * k;
             let r = a / tip_area;
             let dim = b.blob.width().max(b.blob.height()) as f64 * k;
-            ((0.3..3.0).contains(&r) && dim < 2.5 * w + 2.0 * k).then(|| {
-                let (x, y) = coarse.to_full(b.blob.cx, b.blob.cy);
-                (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64)
-            })
+            ((0.3..3.0).contains(&r) && dim < 2.5 * w + 2.0 * k && !touches_frame(&b.blob, coarse))
+                .then(|| {
+                    let (x, y) = coarse.to_full(b.blob.cx, b.blob.cy);
+                    (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64)
+                })
         })
         .collect();
     let px = w * recipe.pitch_mm[0] / recipe.pin_mm;
@@ -194,6 +210,20 @@ fn share_inside(small: &Candidate, large: &Candidate) -> f64 {
     inside as f64 / small.pts.len() as f64
 }
 
+/// The highest score; ties to the stronger matched blobs, then to the
+/// larger width (the ladder runs from the largest down).
+fn best_candidate(cands: &[Candidate]) -> Option<usize> {
+    let mut best: Option<usize> = None;
+    for (i, c) in cands.iter().enumerate() {
+        if best.is_none_or(|b| {
+            c.score > cands[b].score || (c.score == cands[b].score && c.peak > cands[b].peak)
+        }) {
+            best = Some(i);
+        }
+    }
+    best
+}
+
 /// Estimates the tip width (px) and the pitch (px) from the image alone.
 pub fn estimate<P: Px>(
     plane: &Plane<P>,
@@ -252,15 +282,15 @@ pub fn estimate<P: Px>(
     // its matched blobs stand at least `PEAK_SHARE` of the strongest
     // candidate's (a lattice of texture blobs at 5 × the tip width scores
     // as many neighbours as the few pins but at a hundredth of their
-    // contrast). Among those, the highest score; ties to the larger width.
+    // contrast). Among those, the highest score; ties to the stronger
+    // blobs. A tip stands highest in the top-hat at its own width: at a
+    // larger width the smoothing box spreads it (a lattice of every other
+    // tip, when defects leave one spacing at each width, peaked at 0.35
+    // of full scale at twice the width and 0.80 at its own), at a smaller
+    // one the opening leaves only its rim and glints.
     let top_peak = cands.iter().map(|c| c.peak).fold(0.0, f64::max);
     cands.retain(|c| c.peak >= PEAK_SHARE * top_peak);
-    let mut best: Option<usize> = None;
-    for (i, c) in cands.iter().enumerate() {
-        if best.is_none_or(|b| c.score > cands[b].score) {
-            best = Some(i);
-        }
-    }
+    let mut best = best_candidate(&cands);
     // Cross-check with the blobs' size: a lattice whose blobs lie inside the
     // tips of a lattice at twice its width or more is structure of those
     // tips (glints, rim slivers a narrow top-hat leaves of a large tip,
@@ -355,5 +385,41 @@ mod tests {
         );
         assert!((share_inside(&small, &large) - 0.75).abs() < 1e-12);
         assert_eq!(share_inside(&cand(8.0, vec![]), &large), 0.0);
+    }
+
+    /// Evenly spaced bumps along the frame's top edge (a top-hat ridge cut
+    /// by noise) at the pitch the recipe implies for 6 px tips: no tips.
+    #[test]
+    fn bumps_along_the_frames_edge_are_no_lattice() {
+        let (w, h) = (200usize, 80usize);
+        let mut data = vec![10f32; w * h];
+        for i in 0..7 {
+            let x0 = 10 + 24 * i;
+            for y in 0..4 {
+                for x in x0..x0 + 6 {
+                    data[y * w + x] = 100.0;
+                }
+            }
+        }
+        let mut coarse = Coarse { w, h, k: 1, data };
+        let r = recipe(1, 6, "");
+        assert_eq!(score_candidate(&r, &coarse, 6.0).score, 0);
+        // The same bumps inside the frame are a lattice.
+        coarse.data.rotate_right(20 * w);
+        assert_eq!(score_candidate(&r, &coarse, 6.0).score, 6);
+    }
+
+    #[test]
+    fn equal_scores_go_to_the_stronger_blobs() {
+        // Every other tip at twice the width (the ladder's first) against
+        // the tips at their own width: one spacing each.
+        let mut wide = cand(17.0, vec![(44.0, 784.0)]);
+        wide.peak = 0.35;
+        let mut own = cand(6.9, vec![(100.0, 785.0)]);
+        own.peak = 0.80;
+        assert_eq!(best_candidate(&[wide, own]), Some(1));
+        let (mut a, b) = (cand(17.0, vec![(1.0, 1.0)]), cand(6.9, vec![(1.0, 1.0)]));
+        a.peak = b.peak;
+        assert_eq!(best_candidate(&[a, b]), Some(0));
     }
 }

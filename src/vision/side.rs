@@ -42,6 +42,37 @@ struct Bar {
     height_px: f64,
 }
 
+/// Largest step (coarse px) between neighbouring columns' run tops on an
+/// edge the housing's top can be: a top edge tilted up to
+/// [`grid::MAX_TILT_DEG`] moves 0.2 px a column, a side edge of a block
+/// rotated that much 4.7 px or more.
+const MAX_TOP_STEP: f64 = 3.0;
+
+/// The run tops (column, top row; sorted by column) without those on a
+/// steep edge: a top whose neighbouring columns' tops both lie more than
+/// [`MAX_TOP_STEP`] away. A housing block taller than wide, rotated, shows
+/// one of its sides to the columns as a staircase of run tops (each column
+/// left of that side starts its run where the side crosses it); in a tall
+/// frame those outnumber the top edge's columns, and the robust line then
+/// found the side (tilted 85°). A column without a neighbouring top (an
+/// isolated run) is kept: the robust line decides.
+fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let near = |i: usize, j: Option<usize>| {
+        j.and_then(|j| tops.get(j))
+            .filter(|q| (q.0 - tops[i].0).abs() == 1.0)
+            .map(|q| (q.1 - tops[i].1).abs() <= MAX_TOP_STEP)
+    };
+    (0..tops.len())
+        .filter(
+            |&i| match (near(i, i.checked_sub(1)), near(i, Some(i + 1))) {
+                (None, None) => true,
+                (l, r) => l.unwrap_or(false) || r.unwrap_or(false),
+            },
+        )
+        .map(|i| tops[i])
+        .collect()
+}
+
 /// Least contrast of a dust shadow, as a fraction of the silhouette's
 /// (backlight to housing): dust is opaque, noise clumps are not.
 const DUST_MIN_CONTRAST: f64 = 0.4;
@@ -107,6 +138,7 @@ pub fn inspect_side<P: Px>(
             tops.push((x as f64, best_start as f64));
         }
     }
+    let tops = drop_steep_tops(&tops);
     let no_housing =
         |msg: &str| VisionError::NoHousing(format!("{msg} (recipe {part}, side view)"));
     if tops.len() < 8 {
@@ -718,4 +750,51 @@ pub fn inspect_side<P: Px>(
         found,
         warnings,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Run tops of a housing block 30 columns wide and much taller than
+    /// the frame shows, rotated 4.4°: the top edge (with three pins on
+    /// it) and, right of it, the staircase its side leaves (12.9 rows a
+    /// column), longer than the top edge.
+    fn tall_block_tops() -> Vec<(f64, f64)> {
+        let slope = 4.4f64.to_radians().tan();
+        let mut tops = Vec::new();
+        for x in 0..30 {
+            let mut y = 100.0 + slope * x as f64;
+            if [5, 6, 15, 16, 25].contains(&x) {
+                y -= 20.0; // pins
+            }
+            tops.push((x as f64, y.round()));
+        }
+        for x in 30..70 {
+            let y = 100.0 + slope * 30.0 + (x - 29) as f64 / slope;
+            tops.push((x as f64, y.round()));
+        }
+        tops
+    }
+
+    #[test]
+    fn a_tall_blocks_side_is_not_its_top_edge() {
+        let tops = tall_block_tops();
+        // All tops: the staircase wins (the error this guards against).
+        let all = fit::robust_line(&tops, 1.5).unwrap();
+        assert!(all.line.b.atan().to_degrees().abs() > 45.0);
+        let kept = drop_steep_tops(&tops);
+        assert!(kept.iter().all(|p| p.0 < 31.0));
+        let l = fit::robust_line(&kept, 1.5).unwrap();
+        assert!((l.line.b.atan().to_degrees() - 4.4).abs() < 1.0);
+    }
+
+    #[test]
+    fn tops_of_a_flat_edge_and_isolated_runs_are_kept() {
+        let tops: Vec<(f64, f64)> = (0..20)
+            .map(|x| (x as f64, 50.0 + (x % 3) as f64))
+            .chain([(40.0, 10.0)])
+            .collect();
+        assert_eq!(drop_steep_tops(&tops).len(), tops.len());
+    }
 }
