@@ -4,6 +4,7 @@
 //! and a tip's area ratio that survives blur. The top view's verdicts on
 //! damaged tips and extras are made from these.
 
+use super::gray::{Plane, Px};
 use super::grid;
 use super::measure::{BlobMeasure, Roi};
 use super::recipe::PinShape;
@@ -131,9 +132,128 @@ pub(crate) fn snr_of(m: &BlobMeasure) -> f64 {
     }
 }
 
+/// Mean level (`sign` space) inside a disc of radius `r` around `c`, each
+/// pixel weighted by how much of it lies within `r` (a 1 px ramp across
+/// the rim); pixels beyond the image are left out. `None` when the disc
+/// holds no pixel.
+pub(crate) fn disc_mean<P: Px>(plane: &Plane<P>, sign: f32, c: (f64, f64), r: f64) -> Option<f64> {
+    let x0 = (c.0 - r - 1.0).floor().max(0.0) as usize;
+    let y0 = (c.1 - r - 1.0).floor().max(0.0) as usize;
+    let x1 = ((c.0 + r + 1.0).ceil().max(0.0) as usize).min(plane.w.checked_sub(1)?);
+    let y1 = ((c.1 + r + 1.0).ceil().max(0.0) as usize).min(plane.h.checked_sub(1)?);
+    let (mut sw, mut sv) = (0f64, 0f64);
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let d = (x as f64 - c.0).hypot(y as f64 - c.1);
+            let w = (r + 0.5 - d).clamp(0.0, 1.0);
+            if w > 0.0 {
+                sw += w;
+                sv += w * (sign * plane.at(x, y)) as f64;
+            }
+        }
+    }
+    (sw > 0.0).then(|| sv / sw)
+}
+
+/// An extra candidate's core level as a fraction of the way from the local
+/// background `b` to the local tip level `t`: the mean over a disc of the
+/// smallest area the extras rule counts (`min_area_px`), at the blob's
+/// centre. Unlike the median of the blob's own mask (the pixels that noise
+/// lifted above a threshold, which in a noisy image stands one or two σ
+/// above the level of what is there), this mean is not selected by the
+/// noise: a ridge of the housing's rim or a shading dip that noise clumps
+/// make look tip-bright keeps its own, low level, while debris (opaque, at
+/// a tip's level) fills the disc.
+pub(crate) fn core_contrast<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    c: (f64, f64),
+    min_area_px: f64,
+    t: f32,
+    b: f32,
+) -> Option<f64> {
+    let r = (min_area_px.max(1.0) / std::f64::consts::PI).sqrt();
+    let mean = disc_mean(plane, sign, c, r)?;
+    Some(contrast_ratio(mean as f32, t, b))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 40 × 40 image at the housing's level 100 (tip level 200 here)
+    /// with, inside radius 3.5 of (20, 20), either debris at the tip's
+    /// level or a faint structure (mean 0.2 of the tip contrast) whose
+    /// pixels noise has split into +0.9 and −0.5 (a checkerboard: the
+    /// bright half is connected, as a threshold picks noise peaks).
+    fn patch(debris: bool) -> Vec<u16> {
+        let mut d = vec![100u16; 40 * 40];
+        for y in 0..40 {
+            for x in 0..40 {
+                if (x as f64 - 20.0).hypot(y as f64 - 20.0) <= 3.5 {
+                    d[y * 40 + x] = if debris {
+                        200
+                    } else if (x + y) % 2 == 0 {
+                        190
+                    } else {
+                        50
+                    };
+                }
+            }
+        }
+        d
+    }
+
+    fn levels_of(d: &[u16]) -> (f64, f64) {
+        let plane = Plane {
+            w: 40,
+            h: 40,
+            data: d,
+        };
+        let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 7.0, 40, 40);
+        let m = super::super::measure::measure_blob(
+            &plane,
+            1.0,
+            roi,
+            (20.0, 20.0),
+            super::super::measure::Localiser::Coverage,
+            2,
+            None,
+        )
+        .expect("a blob");
+        // The smallest extra the default rule counts: 0.25 of a 120 px² tip.
+        let core =
+            core_contrast(&plane, 1.0, (m.x, m.y), 0.25 * 120.0, 200.0, 100.0).expect("a core");
+        (contrast_ratio(m.hi, 200.0, 100.0), core)
+    }
+
+    #[test]
+    fn a_noise_lifted_faint_structure_is_tip_bright_by_its_mask_but_not_by_its_core() {
+        let (mask_level, core) = levels_of(&patch(false));
+        // The mask's level (the pixels above the half level) reads tip-bright...
+        assert!(mask_level >= MIN_TIP_CONTRAST, "{mask_level}");
+        // ... its core says what is there: about 0.2 of the tip contrast.
+        assert!(core < MIN_TIP_CONTRAST && core > 0.0, "{core}");
+    }
+
+    #[test]
+    fn debris_at_the_tip_level_fills_its_core() {
+        let (mask_level, core) = levels_of(&patch(true));
+        assert!((mask_level - 1.0).abs() < 0.05, "{mask_level}");
+        assert!((core - 1.0).abs() < 0.05, "{core}");
+    }
+
+    #[test]
+    fn the_disc_mean_leaves_out_what_lies_beyond_the_image() {
+        let d = vec![100u16; 16];
+        let plane = Plane {
+            w: 4,
+            h: 4,
+            data: &d[..],
+        };
+        let m = disc_mean(&plane, 1.0, (0.0, 0.0), 2.0).expect("pixels");
+        assert!((m - 100.0).abs() < 1e-9, "{m}");
+    }
 
     #[test]
     fn the_energy_disc_holds_the_tip_and_two_blur_sigma_within_half_a_pitch() {

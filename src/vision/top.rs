@@ -19,7 +19,7 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_PROMINENCE, MIN_SNR, MIN_TIP_CONTRAST,
-    area_ratio_of, contrast_ratio, snr_of, tip_disc_radius,
+    area_ratio_of, contrast_ratio, core_contrast, snr_of, tip_disc_radius,
 };
 
 /// Full-resolution measurement of every coarse blob.
@@ -657,6 +657,12 @@ pub fn inspect_top<P: Px>(
             reason: None,
         };
         let rho_v = rho.unwrap_or(1.0);
+        // The level of its core, not selected by the noise: the mean over
+        // a disc of the smallest area the rule counts, at its centre.
+        let core = expected.and_then(|(t, b)| {
+            core_contrast(plane, sign, (m.x, m.y), rule.min_area_ratio * tip_px, t, b)
+        });
+        let core_v = core.unwrap_or(1.0);
         if ar < rule.min_area_ratio {
             if ar >= 0.5 * rule.min_area_ratio {
                 e.ignored_because = Some(format!(
@@ -684,6 +690,12 @@ pub fn inspect_top<P: Px>(
                 ));
                 ignored.push(e);
             }
+        } else if core_v < MIN_TIP_CONTRAST {
+            e.ignored_because = Some(format!(
+                "its core (the mean over {} of a tip's area at its centre) reaches {core_v:.2} of the local tip level, below {MIN_TIP_CONTRAST}: its mask's level {rho_v:.2} was noise lifting a fainter structure (a housing rim, shading)",
+                rule.min_area_ratio
+            ));
+            ignored.push(e);
         } else if snr < MIN_SNR {
             e.ignored_because = Some(format!(
                 "{snr:.1} σ above the local noise floor, below {MIN_SNR}"
