@@ -328,14 +328,14 @@ pub(crate) fn check_contrast(
 mod tests {
     use super::*;
 
-    /// Four tips (peak 100) in a field of twenty fainter tip-sized texture
-    /// blobs (peak 20): counted over every blob, the typical contrast is the
-    /// texture's and the texture passes the threshold; counted over the four
-    /// strongest (the part has four pins), it is the tips' and only the tips
-    /// remain.
+    /// Four tips (peak 100) beside 120 fainter tip-sized texture blobs
+    /// (peak 20, enough of them for Otsu's level to fall below them):
+    /// counted over every blob, the typical contrast is the texture's and
+    /// the texture passes the threshold; counted over the four strongest
+    /// (the part has four pins), it is the tips' and only the tips remain.
     #[test]
     fn texture_that_outnumbers_the_tips_does_not_set_their_contrast() {
-        let (w, h) = (240usize, 160usize);
+        let (w, h) = (320usize, 240usize);
         let mut data = vec![0f32; w * h];
         let mut square = |x0: usize, y0: usize, v: f32| {
             for y in y0..y0 + 6 {
@@ -345,15 +345,15 @@ mod tests {
             }
         };
         for i in 0..4 {
-            square(20 + 50 * i, 20, 100.0);
+            square(40 + 70 * i, 20, 100.0);
         }
-        for i in 0..20 {
-            square(10 + 22 * (i % 10), 70 + 40 * (i / 10), 20.0);
+        for i in 0..120 {
+            square(8 + 16 * (i % 20), 60 + 28 * (i / 20), 20.0);
         }
         let coarse = Coarse { w, h, k: 1, data };
         let all = search_coarse(&coarse, 6.0, None);
         assert!(all.tip_contrast < 30.0, "{}", all.tip_contrast);
-        assert_eq!(all.blobs.len(), 24);
+        assert_eq!(all.blobs.len(), 124);
         let four = search_coarse_expecting(&coarse, 6.0, None, Some(4));
         assert!(four.tip_contrast > 90.0, "{}", four.tip_contrast);
         assert_eq!(four.blobs.len(), 4);

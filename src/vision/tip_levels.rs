@@ -245,7 +245,7 @@ mod tests {
 
     #[test]
     fn the_disc_mean_leaves_out_what_lies_beyond_the_image() {
-        let d = vec![100u16; 16];
+        let d = [100u16; 16];
         let plane = Plane {
             w: 4,
             h: 4,
