@@ -137,21 +137,11 @@ pub(crate) fn snr_of(m: &BlobMeasure) -> f64 {
 /// the rim); pixels beyond the image are left out. `None` when the disc
 /// holds no pixel.
 pub(crate) fn disc_mean<P: Px>(plane: &Plane<P>, sign: f32, c: (f64, f64), r: f64) -> Option<f64> {
-    let x0 = (c.0 - r - 1.0).floor().max(0.0) as usize;
-    let y0 = (c.1 - r - 1.0).floor().max(0.0) as usize;
-    let x1 = ((c.0 + r + 1.0).ceil().max(0.0) as usize).min(plane.w.checked_sub(1)?);
-    let y1 = ((c.1 + r + 1.0).ceil().max(0.0) as usize).min(plane.h.checked_sub(1)?);
     let (mut sw, mut sv) = (0f64, 0f64);
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            let d = (x as f64 - c.0).hypot(y as f64 - c.1);
-            let w = (r + 0.5 - d).clamp(0.0, 1.0);
-            if w > 0.0 {
-                sw += w;
-                sv += w * (sign * plane.at(x, y)) as f64;
-            }
-        }
-    }
+    super::measure::for_each_in_disc(plane, sign, c, r, |w, v| {
+        sw += w;
+        sv += w * v as f64;
+    });
     (sw > 0.0).then(|| sv / sw)
 }
 
