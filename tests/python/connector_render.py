@@ -223,7 +223,9 @@ def render_one(out, seed):
         hu, hv = ext_u / mmpp, ext_v / mmpp
         bx = abs(c) * hu + abs(s) * hv + 1.3 * px_ / mmpp
         by = abs(s) * hu + abs(c) * hv + 1.3 * px_ / mmpp
-        cx, cy = u01(rng, bx, W - 1 - bx), u01(rng, by, H - 1 - by)
+        # int() above can cut the frame a pixel below what the part needs:
+        # then the part sits centred (an empty range crashed seed 550 342).
+        cx, cy = u01(rng, bx, max(bx, W - 1 - bx)), u01(rng, by, max(by, H - 1 - by))
     else:
         hu = ext_u / mmpp
         cx = u01(rng, abs(c) * hu + 10, W - 1 - abs(c) * hu - 10)
