@@ -199,6 +199,120 @@ pub fn robust_similarity(
     })
 }
 
+/// Fits with the fewest points mask a bent pin: with three or four pins
+/// the least-squares start spreads one pin's bend over all of them, the
+/// median residual is then a share of the bend, and the biweight's cut-off
+/// (4.685 × 1.48 × that median) keeps the bent pin in. Above this many
+/// points the median is set by the good pins and the masking is gone.
+pub const CONSENSUS_MAX_POINTS: usize = 16;
+
+/// Truncated squared residuals (MSAC's cost): a point within `tau_px`
+/// costs its squared residual, any point further costs `tau_px²`.
+fn truncated_cost(
+    model: &[(f64, f64)],
+    image: &[(f64, f64)],
+    sim: &Similarity,
+    tau_px: f64,
+) -> f64 {
+    let t2 = tau_px * tau_px;
+    model
+        .iter()
+        .zip(image)
+        .map(|(m, p)| {
+            let q = sim.apply(m.0, m.1);
+            ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).min(t2)
+        })
+        .sum()
+}
+
+/// The similarity two points determine exactly (with `fixed_scale`, the
+/// rotation of their joining vector and the translation of their midpoint).
+fn through_pair(
+    m: [(f64, f64); 2],
+    p: [(f64, f64); 2],
+    fixed_scale: Option<f64>,
+) -> Option<Similarity> {
+    let dm = (m[1].0 - m[0].0, m[1].1 - m[0].1);
+    let dp = (p[1].0 - p[0].0, p[1].1 - p[0].1);
+    let lm = dm.0.hypot(dm.1);
+    if !(lm > 1e-12) {
+        return None;
+    }
+    let theta = dp.1.atan2(dp.0) - dm.1.atan2(dm.0);
+    let s = fixed_scale.unwrap_or(dp.0.hypot(dp.1) / lm);
+    if !(s.is_finite() && s > 0.0) {
+        return None;
+    }
+    let mid_m = (0.5 * (m[0].0 + m[1].0), 0.5 * (m[0].1 + m[1].1));
+    let mid_p = (0.5 * (p[0].0 + p[1].0), 0.5 * (p[0].1 + p[1].1));
+    let (sn, cs) = theta.sin_cos();
+    Some(Similarity {
+        s,
+        theta,
+        tx: mid_p.0 - s * (cs * mid_m.0 - sn * mid_m.1),
+        ty: mid_p.1 - s * (sn * mid_m.0 + cs * mid_m.1),
+    })
+}
+
+/// [`robust_similarity`] that a bent pin among a few cannot mask: besides
+/// the fit from `init`, every pair of points proposes the similarity it
+/// determines, the proposal with the least truncated cost (residuals over
+/// `tau_px` count as `tau_px`, MSAC) starts a second robust fit, and the
+/// fit with the lower truncated cost over all points is returned (from
+/// four points on). `tau_px`
+/// is the distance beyond which a pin is off its place (the position
+/// tolerance): a pin bent beyond it then costs the same wherever it is, so
+/// the grid follows the pins that agree. With more than
+/// [`CONSENSUS_MAX_POINTS`] points this is [`robust_similarity`].
+pub fn consensus_similarity(
+    model: &[(f64, f64)],
+    image: &[(f64, f64)],
+    fixed_scale: Option<f64>,
+    init: Option<Similarity>,
+    min_sigma_px: f64,
+    tau_px: f64,
+) -> Option<RobustFit> {
+    let from_init = robust_similarity(model, image, fixed_scale, init, min_sigma_px);
+    // With three points a pair leaves one point as the only check, and the
+    // least cost does not tell a bent pin from pins that all stand off:
+    // with a free scale, three collinear pins with an end one bent by d
+    // (the outer pair leaves the middle one off by d/2); rigid, three pins
+    // each 0.8 tolerances off in random directions, which a pair explains
+    // with one pin bent (unit test in `synth_envelope`, blurred tips off
+    // centre). From four points on, a pair leaves two checks.
+    let n = model.len();
+    if n < 4 || n > CONSENSUS_MAX_POINTS || image.len() != n || !(tau_px > 0.0) {
+        return from_init;
+    }
+    let mut best: Option<(f64, Similarity)> = None;
+    for i in 0..n {
+        for j in i + 1..n {
+            let Some(sim) = through_pair([model[i], model[j]], [image[i], image[j]], fixed_scale)
+            else {
+                continue;
+            };
+            let cost = truncated_cost(model, image, &sim, tau_px);
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, sim));
+            }
+        }
+    }
+    let Some((_, proposal)) = best else {
+        return from_init;
+    };
+    let from_pair = robust_similarity(model, image, fixed_scale, Some(proposal), min_sigma_px);
+    match (from_init, from_pair) {
+        (Some(a), Some(b)) => {
+            let (ca, cb) = (
+                truncated_cost(model, image, &a.sim, tau_px),
+                truncated_cost(model, image, &b.sim, tau_px),
+            );
+            Some(if cb < ca { b } else { a })
+        }
+        (a, b) => a.or(b),
+    }
+}
+
 /// A line y = a + b x.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Line {
@@ -381,6 +495,70 @@ mod tests {
         // Free scale too.
         let f = robust_similarity(&m, &p, None, None, 0.05).unwrap();
         assert!((f.sim.s - truth.s).abs() < 1e-6);
+    }
+
+    /// Four pins in a row, rigid scale, the last bent across the row by 2.5
+    /// tolerances: least squares turn the row towards it and leave it only
+    /// 0.3 of its bend (the end point's leverage is 0.7), the median
+    /// residual lifts the biweight's cut over that, and the pin read within
+    /// tolerance. A pair of good pins fits the row and leaves the bend on
+    /// the bent pin.
+    #[test]
+    fn a_bent_end_pin_of_four_is_not_masked() {
+        let truth = Similarity {
+            s: 100.0,
+            theta: 0.02,
+            tx: 800.0,
+            ty: 600.0,
+        };
+        let m: Vec<(f64, f64)> = (0..4).map(|c| ((c as f64 - 1.5) * 2.5, 0.0)).collect();
+        let mut p: Vec<_> = m.iter().map(|q| truth.apply(q.0, q.1)).collect();
+        // Tolerance 0.1 mm = 10 px; bent 0.25 mm = 25 px, plus noise.
+        let (sn, cs) = truth.theta.sin_cos();
+        p[3].0 -= 25.0 * sn;
+        p[3].1 += 25.0 * cs;
+        p[0].0 += 0.2;
+        p[1].1 -= 0.15;
+        let resid = |f: &RobustFit, i: usize| {
+            let q = f.sim.apply(m[i].0, m[i].1);
+            (q.0 - p[i].0).hypot(q.1 - p[i].1)
+        };
+        let masked = robust_similarity(&m, &p, Some(truth.s), None, 0.1).unwrap();
+        assert!(
+            resid(&masked, 3) < 10.0,
+            "the old fit masks it: {}",
+            resid(&masked, 3)
+        );
+        let f = consensus_similarity(&m, &p, Some(truth.s), None, 0.1, 10.0).unwrap();
+        assert!((resid(&f, 3) - 25.0).abs() < 0.5, "{}", resid(&f, 3));
+        assert!((0..3).all(|i| resid(&f, i) < 0.5));
+        assert_eq!(f.inlier, vec![true, true, true, false]);
+        // Three pins are left to the plain robust fit (see the function).
+        let f3 = consensus_similarity(&m[1..], &p[1..], Some(truth.s), None, 0.1, 10.0).unwrap();
+        let f3r = robust_similarity(&m[1..], &p[1..], Some(truth.s), None, 0.1).unwrap();
+        assert_eq!(f3, f3r);
+    }
+
+    /// Four pins of a 2 × 2 part, one bent diagonally by 1.3 tolerances.
+    #[test]
+    fn a_bent_pin_of_a_two_by_two_part_stands_out() {
+        let truth = Similarity {
+            s: 30.0,
+            theta: -0.05,
+            tx: 260.0,
+            ty: 110.0,
+        };
+        let m = vec![(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
+        let mut p: Vec<_> = m.iter().map(|q| truth.apply(q.0, q.1)).collect();
+        p[0].0 -= 4.0;
+        p[0].1 -= 4.0; // 5.66 px against a 4.35 px tolerance
+        let f = consensus_similarity(&m, &p, Some(truth.s), None, 0.1, 4.35).unwrap();
+        let q = f.sim.apply(m[0].0, m[0].1);
+        assert!(((q.0 - p[0].0).hypot(q.1 - p[0].1) - 32f64.sqrt()).abs() < 1e-6);
+        // A good part: the consensus fit is the plain fit.
+        let good: Vec<_> = m.iter().map(|q| truth.apply(q.0, q.1)).collect();
+        let f = consensus_similarity(&m, &good, Some(truth.s), None, 0.1, 4.35).unwrap();
+        assert!((f.sim.tx - truth.tx).abs() < 1e-9 && (f.sim.theta - truth.theta).abs() < 1e-12);
     }
 
     #[test]

@@ -260,7 +260,8 @@ pub fn inspect_top<P: Px>(
         ty: c0.1,
     };
     let (mut sim, mut inliers, mut rms) = if model.len() >= 2 {
-        match fit::robust_similarity(&model, &image, fixed, Some(init), 0.1) {
+        let tau = recipe.tolerance.position_mm * init.s;
+        match fit::consensus_similarity(&model, &image, fixed, Some(init), 0.1, tau) {
             Some(f) => {
                 let n = f.inlier.iter().filter(|b| **b).count();
                 (f.sim, n, f.rms_px)
@@ -413,7 +414,8 @@ pub fn inspect_top<P: Px>(
             .iter()
             .map(|&(_, ci)| (cands[ci].m.x, cands[ci].m.y))
             .collect();
-        if let Some(f) = fit::robust_similarity(&model, &image, fixed, Some(sim), 0.1) {
+        let tau = recipe.tolerance.position_mm * sim.s;
+        if let Some(f) = fit::consensus_similarity(&model, &image, fixed, Some(sim), 0.1, tau) {
             sim = f.sim;
             inliers = f.inlier.iter().filter(|b| **b).count();
             rms = f.rms_px;
