@@ -90,6 +90,36 @@ pub(crate) const MIN_SNR: f64 = 5.0;
 /// fraction of the local tip contrast above the saddle where they join.
 pub(crate) const MIN_PROMINENCE: f64 = 0.05;
 
+/// An extra's core (its disc mean, [`core_contrast`]) must stand this many
+/// of its own noise σ ([`core_sigma`]) above `MIN_TIP_CONTRAST`. The blob
+/// is where the noise lifted a structure above the coarse threshold, so
+/// its disc mean is itself biased up by about one σ; a housing rim's ridge
+/// at 0.3 of the tip contrast under σ ≈ 14 DN reads 0.50–0.65 there, while
+/// debris (opaque, at a tip's level) stands well clear of the limit.
+pub(crate) const CORE_SIGMAS: f64 = 2.0;
+/// A blob that is not cut from a larger structure must stand at least this
+/// fraction of the local tip contrast above its own surround (the median of
+/// its window's border): half the tip-bright limit. Its level says how
+/// bright it is against the housing; a bump of a fixture that is itself as
+/// bright as the tips (a bright fixture's texture) is tip-bright by level
+/// but stands a few hundredths above what lies around it. (A cut blob's
+/// height above its saddle is `MIN_PROMINENCE`'s to judge.)
+pub(crate) const MIN_LOCAL_CONTRAST: f64 = 0.5 * MIN_TIP_CONTRAST;
+
+/// The noise σ of [`core_contrast`] in the same units (fractions of the
+/// local tip contrast `t − b`): pixel noise `noise` averaged over the
+/// disc's `min_area_px` pixels.
+pub(crate) fn core_sigma(noise: f32, min_area_px: f64, t: f32, b: f32) -> f64 {
+    noise as f64 / min_area_px.max(1.0).sqrt() / ((t - b) as f64).max(1e-6)
+}
+
+/// How far a measured blob stands above its own surround (its level over
+/// the median of its window's border), as a fraction of the local tip
+/// contrast `t − b`.
+pub(crate) fn local_contrast(m: &BlobMeasure, t: f32, b: f32) -> f64 {
+    contrast_ratio(m.hi, t, b) - contrast_ratio(m.lo, t, b)
+}
+
 /// Tip level and background level expected at a place, from the nearest
 /// intact tips.
 pub(crate) struct LocalLevels {
@@ -231,6 +261,88 @@ mod tests {
         let (mask_level, core) = levels_of(&patch(true));
         assert!((mask_level - 1.0).abs() < 0.05, "{mask_level}");
         assert!((core - 1.0).abs() < 0.05, "{core}");
+    }
+
+    /// Deterministic noise in [−a, a] (an LCG), for the noisy patches.
+    fn noisy(base: &mut [u16], a: f64, seed: u64) {
+        let mut s = seed;
+        for v in base.iter_mut() {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = ((s >> 33) as f64 / (1u64 << 31) as f64) * 2.0 - 1.0;
+            *v = (*v as f64 + a * u).round().clamp(0.0, 65535.0) as u16;
+        }
+    }
+
+    /// Measures the blob at (20, 20) of a 40 × 40 patch; its core level,
+    /// core noise σ and contrast over its own surround, against a tip
+    /// level 200 over a housing at 100 (a 120 px² tip, the default rule's
+    /// quarter-tip core).
+    fn judged(d: &[u16]) -> (f64, f64, f64) {
+        let plane = Plane {
+            w: 40,
+            h: 40,
+            data: d,
+        };
+        let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 7.0, 40, 40);
+        let m = super::super::measure::measure_blob(
+            &plane,
+            1.0,
+            roi,
+            (20.0, 20.0),
+            super::super::measure::Localiser::Coverage,
+            2,
+            None,
+        )
+        .expect("a blob");
+        let core_px = 0.25 * 120.0;
+        let core = core_contrast(&plane, 1.0, (m.x, m.y), core_px, 200.0, 100.0).expect("a core");
+        let sd = core_sigma(m.noise, core_px, 200.0, 100.0);
+        (core, sd, local_contrast(&m, 200.0, 100.0))
+    }
+
+    fn disc_patch(bg: u16, inside: u16, r: f64) -> Vec<u16> {
+        let mut d = vec![bg; 40 * 40];
+        for y in 0..40 {
+            for x in 0..40 {
+                if (x as f64 - 20.0).hypot(y as f64 - 20.0) <= r {
+                    d[y * 40 + x] = inside;
+                }
+            }
+        }
+        d
+    }
+
+    /// A rim ridge at 0.55 of the tip contrast under heavy noise (±45 DN,
+    /// σ ≈ 26 DN): its core clears the tip-bright limit by less than its
+    /// own noise allows (it was an extra before the margin); debris at the
+    /// tip's level under the same noise clears it by far.
+    #[test]
+    fn a_core_within_its_noise_of_the_limit_is_not_tip_bright() {
+        let mut ridge = disc_patch(100, 155, 4.0);
+        noisy(&mut ridge, 45.0, 7);
+        let (core, sd, _) = judged(&ridge);
+        assert!(core >= MIN_TIP_CONTRAST, "{core}");
+        assert!(core - CORE_SIGMAS * sd < MIN_TIP_CONTRAST, "{core} {sd}");
+        let mut debris = disc_patch(100, 200, 4.0);
+        noisy(&mut debris, 45.0, 7);
+        let (core, sd, local) = judged(&debris);
+        assert!(core - CORE_SIGMAS * sd >= MIN_TIP_CONTRAST, "{core} {sd}");
+        assert!(local >= MIN_LOCAL_CONTRAST, "{local}");
+    }
+
+    /// A bump of 0.07 of the tip contrast on a fixture brighter than the
+    /// tips (level 1.1): tip-bright by level and by core, but it stands a
+    /// few hundredths above its own surround — the fixture's texture.
+    #[test]
+    fn a_bump_on_a_fixture_as_bright_as_the_tips_is_not_debris() {
+        let bump = disc_patch(210, 217, 6.0);
+        let (core, _, local) = judged(&bump);
+        assert!(core >= MIN_TIP_CONTRAST, "{core}");
+        assert!(local < MIN_LOCAL_CONTRAST, "{local}");
+        let (_, _, local) = judged(&disc_patch(100, 200, 6.0));
+        assert!((local - 1.0).abs() < 0.05, "{local}");
     }
 
     #[test]

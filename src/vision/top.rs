@@ -18,8 +18,9 @@ use super::measure::{self, BlobMeasure, Roi};
 use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
-    BLUR_RELATIVE, Candidate, LocalLevels, MIN_PROMINENCE, MIN_SNR, MIN_TIP_CONTRAST,
-    area_ratio_of, contrast_ratio, core_contrast, snr_of, tip_disc_radius,
+    BLUR_RELATIVE, CORE_SIGMAS, Candidate, LocalLevels, MIN_LOCAL_CONTRAST, MIN_PROMINENCE,
+    MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of, contrast_ratio, core_contrast, core_sigma,
+    local_contrast, snr_of, tip_disc_radius,
 };
 
 /// Full-resolution measurement of every coarse blob.
@@ -661,10 +662,20 @@ pub fn inspect_top<P: Px>(
         let rho_v = rho.unwrap_or(1.0);
         // The level of its core, not selected by the noise: the mean over
         // a disc of the smallest area the rule counts, at its centre.
-        let core = expected.and_then(|(t, b)| {
-            core_contrast(plane, sign, (m.x, m.y), rule.min_area_ratio * tip_px, t, b)
-        });
+        let core_px = rule.min_area_ratio * tip_px;
+        let core =
+            expected.and_then(|(t, b)| core_contrast(plane, sign, (m.x, m.y), core_px, t, b));
         let core_v = core.unwrap_or(1.0);
+        // The core's own noise, and how far the blob stands above its own
+        // surround (both as fractions of the local tip contrast).
+        let meas = if apart { &m } else { &c.m };
+        let (core_sd, local) = match expected {
+            Some((t, b)) => (
+                core_sigma(meas.noise, core_px, t, b),
+                local_contrast(meas, t, b),
+            ),
+            None => (0.0, 1.0),
+        };
         if ar < rule.min_area_ratio {
             if ar >= 0.5 * rule.min_area_ratio {
                 e.ignored_because = Some(format!(
@@ -692,10 +703,20 @@ pub fn inspect_top<P: Px>(
                 ));
                 ignored.push(e);
             }
+        } else if !cut && local < MIN_LOCAL_CONTRAST {
+            e.ignored_because = Some(format!(
+                "it stands {local:.2} of the local tip contrast above its own surround, below {MIN_LOCAL_CONTRAST}: a bump of a structure as bright as the tips (a bright fixture's texture), not a separate blob"
+            ));
+            ignored.push(e);
         } else if core_v < MIN_TIP_CONTRAST {
             e.ignored_because = Some(format!(
                 "its core (the mean over {} of a tip's area at its centre) reaches {core_v:.2} of the local tip level, below {MIN_TIP_CONTRAST}: its mask's level {rho_v:.2} was noise lifting a fainter structure (a housing rim, shading)",
                 rule.min_area_ratio
+            ));
+            ignored.push(e);
+        } else if core_v - CORE_SIGMAS * core_sd < MIN_TIP_CONTRAST {
+            e.ignored_because = Some(format!(
+                "its core reaches {core_v:.2} ± {core_sd:.2} (noise σ) of the local tip level, not {CORE_SIGMAS} σ above {MIN_TIP_CONTRAST}: noise clumps on a fainter structure (a housing rim, shading) can read that high"
             ));
             ignored.push(e);
         } else if snr < MIN_SNR {
