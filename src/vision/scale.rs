@@ -437,10 +437,10 @@ pub fn estimate<P: Px>(
                     continue;
                 }
                 let c = score_blobs(recipe, pts, *wt, mult);
-                if c.score > 0 {
-                    if let Some(r) = tips_hold(plane, sign, recipe, &c) {
-                        multi.push((c, r));
-                    }
+                if c.score > 0
+                    && let Some(r) = tips_hold(plane, sign, recipe, &c)
+                {
+                    multi.push((c, r));
                 }
             }
             i += 1;
