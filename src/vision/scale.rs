@@ -20,6 +20,15 @@
 //! size must agree with the tip width the pitch implies (a factor of 2 at
 //! most; blur and threshold widen a blob), which is the cross-check that
 //! the lattice found is made of tips.
+//!
+//! The chosen candidate is then checked at full resolution: its blobs,
+//! measured as the inspection measures them at the tip width its spacings
+//! imply, must be whole tips of 0.5–2 × that area (a lattice of every
+//! other tip, left when pins are missing or damaged, measures a quarter;
+//! fragments of large tips run out of their window); one that fails gives
+//! way to the next. When no lattice at one pitch holds, spacings of two
+//! or three pitches are tried and the tips' own measured width picks the
+//! multiple (a 1 × 3 part without its middle pin).
 
 use super::detect::{self, CoarseBlob};
 use super::error::VisionError;
