@@ -20,10 +20,20 @@
 //! size must agree with the tip width the pitch implies (a factor of 2 at
 //! most; blur and threshold widen a blob), which is the cross-check that
 //! the lattice found is made of tips.
+//!
+//! The chosen candidate is then checked at full resolution: its blobs,
+//! measured as the inspection measures them at the tip width its spacings
+//! imply, must be whole tips of 0.5–2 × that area (a lattice of every
+//! other tip, left when pins are missing or damaged, measures a quarter;
+//! fragments of large tips run out of their window); one that fails gives
+//! way to the next. When no lattice at one pitch holds, spacings of two
+//! or three pitches are tried and the tips' own measured width picks the
+//! multiple (a 1 × 3 part without its middle pin).
 
 use super::detect::{self, CoarseBlob};
 use super::error::VisionError;
 use super::gray::{Coarse, Plane, Px};
+use super::measure::{self, Localiser, Roi};
 use super::recipe::{PinShape, Recipe};
 
 /// What the estimate found.
@@ -50,6 +60,8 @@ struct Candidate {
     peak: f64,
     /// Centres of the matched blobs, px.
     pts: Vec<(f64, f64)>,
+    /// Bounding boxes of the matched blobs, full px [x0, y0, x1, y1].
+    boxes: Vec<[f64; 4]>,
 }
 
 /// A candidate's matched blobs must reach this share of the strongest
@@ -82,14 +94,25 @@ fn touches_frame(b: &super::label::Blob, coarse: &Coarse) -> bool {
         || b.y_max as usize + 1 >= coarse.h
 }
 
-fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
+/// A tip-sized blob of the coarse search: centre, width, top-hat peak and
+/// bounding box (full px).
+type TipBlob = (f64, f64, f64, f64, [f64; 4]);
+
+#[cfg(test)]
+fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64, mult: f64) -> Candidate {
+    score_blobs(recipe, &tip_blobs(recipe, coarse, w), w, mult)
+}
+
+/// The coarse search at tip width `w`: the blobs of about a tip's area not
+/// touching the frame.
+fn tip_blobs(recipe: &Recipe, coarse: &Coarse, w: f64) -> Vec<TipBlob> {
     let found = detect::search_coarse(coarse, w, None);
     let k = coarse.k as f64;
     let tip_area = match recipe.pin_shape {
         PinShape::Square => w * w,
         PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
     };
-    let pts: Vec<(f64, f64, f64, f64)> = found
+    found
         .blobs
         .iter()
         .filter_map(|b: &CoarseBlob| {
@@ -99,24 +122,37 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             ((0.3..3.0).contains(&r) && dim < 2.5 * w + 2.0 * k && !touches_frame(&b.blob, coarse))
                 .then(|| {
                     let (x, y) = coarse.to_full(b.blob.cx, b.blob.cy);
-                    (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64)
+                    let bb = &b.blob;
+                    let bx = [
+                        bb.x_min as f64 * k,
+                        bb.y_min as f64 * k,
+                        (bb.x_max as f64 + 1.0) * k - 1.0,
+                        (bb.y_max as f64 + 1.0) * k - 1.0,
+                    ];
+                    (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64, bx)
                 })
         })
-        .collect();
-    let px = w * recipe.pitch_mm[0] / recipe.pin_mm;
-    let py = w * recipe.pitch_mm[1] / recipe.pin_mm;
+        .collect()
+}
+
+/// Scores the blobs found at tip width `w` as a lattice whose matched
+/// neighbours lie `mult` pitches apart.
+fn score_blobs(recipe: &Recipe, pts: &[TipBlob], w: f64, mult: f64) -> Candidate {
+    let px = mult * w * recipe.pitch_mm[0] / recipe.pin_mm;
+    let py = mult * w * recipe.pitch_mm[1] / recipe.pin_mm;
     let tilt = super::grid::MAX_TILT_DEG.to_radians().tan();
     let (mut score, mut support) = (0i64, 0usize);
     let mut spacings = Vec::new();
     let mut widths = Vec::new();
     let mut peaks = Vec::new();
     let mut matched_pts = Vec::new();
+    let mut boxes = Vec::new();
     // Blobs sorted by x for a windowed neighbour search.
     let mut order: Vec<usize> = (0..pts.len()).collect();
     order.sort_by(|&a, &b| pts[a].0.total_cmp(&pts[b].0));
     let reach = 1.3 * px.max(py);
     for (oi, &i) in order.iter().enumerate() {
-        let (xi, yi, wi, pi) = pts[i];
+        let (xi, yi, wi, pi, bi) = pts[i];
         // Nearest blob in the +x cone and in the ±y cone (within ±12°).
         let (mut nx, mut ny) = (f64::INFINITY, f64::INFINITY);
         let lo = order[..oi]
@@ -140,19 +176,22 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             }
         }
         let near = |d: f64, p: f64| (d / p - 1.0).abs() < 0.15;
-        let half =
-            (recipe.cols > 1 && near(nx, 0.5 * px)) || (recipe.rows > 1 && near(ny, 0.5 * py));
+        // (At several pitches apart the pitch itself between is no
+        // sub-lattice: those candidates are only tried when no lattice at
+        // one pitch holds.)
+        let half = mult == 1.0
+            && ((recipe.cols > 1 && near(nx, 0.5 * px)) || (recipe.rows > 1 && near(ny, 0.5 * py)));
         if half {
             score -= 1;
             continue;
         }
         let mut matched = false;
-        if recipe.cols > 1 && near(nx, px) {
-            spacings.push(nx);
+        if recipe.cols as f64 > mult && near(nx, px) {
+            spacings.push(nx / mult);
             matched = true;
         }
-        if recipe.rows > 1 && near(ny, py) {
-            spacings.push(ny * px / py);
+        if recipe.rows as f64 > mult && near(ny, py) {
+            spacings.push(ny * px / py / mult);
             matched = true;
         }
         if matched {
@@ -161,6 +200,7 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
             widths.push(wi);
             peaks.push(pi);
             matched_pts.push((xi, yi));
+            boxes.push(bi);
         }
     }
     let peak = super::grid::median(&mut peaks).unwrap_or(0.0);
@@ -172,6 +212,7 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64) -> Candidate {
         w,
         peak,
         pts: matched_pts,
+        boxes,
     }
 }
 
@@ -224,6 +265,75 @@ fn best_candidate(cands: &[Candidate]) -> Option<usize> {
     best
 }
 
+/// The candidate to try first: the best one ([`best_candidate`]), unless
+/// its blobs lie inside the tips of a lattice at twice its width or more:
+/// then they are structure of those tips (glints, rim slivers a narrow
+/// top-hat leaves of a large tip, fragments of a bevel), not the part. The
+/// tips at their own width stand at least as strong in the top-hat as
+/// their fragments do, so the larger lattice takes over when its blobs are
+/// as strong and hold most of the smaller one's.
+fn choose(cands: &[Candidate]) -> Option<usize> {
+    let bi = best_candidate(cands)?;
+    let b = &cands[bi];
+    let mut bigger: Option<usize> = None;
+    for (i, c) in cands.iter().enumerate() {
+        let holds =
+            c.w >= 2.0 * b.w && c.score >= 2 && c.peak >= 0.8 * b.peak && share_inside(b, c) >= 0.5;
+        if holds && bigger.is_none_or(|g| c.score > cands[g].score) {
+            bigger = Some(i);
+        }
+    }
+    Some(bigger.unwrap_or(bi))
+}
+
+/// At most this many of a candidate's blobs are measured at full
+/// resolution.
+const MAX_CHECKED: usize = 12;
+
+/// A measured tip of this share of the area the candidate implies, or up
+/// to its inverse, is a tip of that width (blur and the threshold move a
+/// tip's measured area by far less; a lattice of every other tip measures
+/// a quarter).
+const TIP_AREA_SHARE: f64 = 0.5;
+
+/// Whether the candidate's blobs are tips of the width its spacings imply,
+/// measured at full resolution as the inspection measures them (window,
+/// dilation and localiser of `top.rs`): at least half the blobs checked
+/// (and one) of a tip's area within [`TIP_AREA_SHARE`], whole in their
+/// window, not elongated. Returns the median measured area / implied area
+/// of those.
+fn tips_hold<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe, c: &Candidate) -> Option<f64> {
+    let mut sp = c.spacings.clone();
+    let pitch_px = super::grid::median(&mut sp)?;
+    let s = pitch_px / recipe.pitch_mm[0];
+    let pin_px = s * recipe.pin_mm;
+    let tip_area = recipe.tip_area_mm2() * s * s;
+    let margin = (0.45 * pin_px).max(4.0);
+    let dilate = ((0.12 * pin_px).round() as usize).max(2);
+    let mut ratios = Vec::new();
+    let mut checked = 0usize;
+    for (&(x, y), b) in c.pts.iter().zip(&c.boxes).take(MAX_CHECKED) {
+        checked += 1;
+        let roi = Roi::around(b[0], b[1], b[2], b[3], margin, plane.w, plane.h);
+        let Some(m) =
+            measure::measure_blob(plane, sign, roi, (x, y), Localiser::default(), dilate, None)
+        else {
+            continue;
+        };
+        let r = m.area_px / tip_area;
+        if !m.touches_border
+            && m.elongation < 3.0
+            && (TIP_AREA_SHARE..=1.0 / TIP_AREA_SHARE).contains(&r)
+        {
+            ratios.push(r);
+        }
+    }
+    if ratios.is_empty() || 2 * ratios.len() < checked {
+        return None;
+    }
+    super::grid::median(&mut ratios)
+}
+
 /// Estimates the tip width (px) and the pitch (px) from the image alone.
 pub fn estimate<P: Px>(
     plane: &Plane<P>,
@@ -243,6 +353,8 @@ pub fn estimate<P: Px>(
     let fit_y = wd.max(ht) / (n_y * recipe.pitch_mm[1] / recipe.pin_mm);
     let w_max = (1.15 * fit_x.min(fit_y)).min(wd.min(ht) / 3.0).max(W_MIN);
     let mut coarse_cache: Vec<Option<Coarse>> = vec![None; 9];
+    // The tip-sized blobs found at each width tried: (width, blobs).
+    let mut tried: Vec<(f64, Vec<TipBlob>)> = Vec::new();
     let mut cands: Vec<Candidate> = Vec::new();
     // From the largest candidate down: large ones are cheap (coarse images).
     // Ending the ladder needs nearly every position matched: counted against
@@ -252,19 +364,24 @@ pub fn estimate<P: Px>(
     let n_match = most_matched(recipe).max(1) as f64;
     let mut w = w_max;
     let mut contrast_checked = false;
-    while w >= W_MIN {
+    let mut blobs_at = |w: f64| -> Result<Vec<TipBlob>, VisionError> {
         let k = detect::coarse_factor(w);
         if coarse_cache[k].is_none() {
             coarse_cache[k] = Some(Coarse::build(plane, k, sign));
         }
         let Some(coarse) = coarse_cache[k].as_ref() else {
-            break;
+            return Ok(Vec::new());
         };
         if !contrast_checked {
             detect::check_contrast(coarse, full_scale)?;
             contrast_checked = true;
         }
-        let c = score_candidate(recipe, coarse, w);
+        Ok(tip_blobs(recipe, coarse, w))
+    };
+    while w >= W_MIN {
+        let pts = blobs_at(w)?;
+        let c = score_blobs(recipe, &pts, w, 1.0);
+        tried.push((w, pts));
         // Every position of the recipe in a row already, and in blobs of a
         // tip's contrast: no smaller candidate can do better (and smaller
         // ones cost the most). A lattice of faint blobs (fixture texture,
@@ -290,31 +407,66 @@ pub fn estimate<P: Px>(
     // one the opening leaves only its rim and glints.
     let top_peak = cands.iter().map(|c| c.peak).fold(0.0, f64::max);
     cands.retain(|c| c.peak >= PEAK_SHARE * top_peak);
-    let mut best = best_candidate(&cands);
-    // Cross-check with the blobs' size: a lattice whose blobs lie inside the
-    // tips of a lattice at twice its width or more is structure of those
-    // tips (glints, rim slivers a narrow top-hat leaves of a large tip,
-    // fragments of a bevel), not the part. The tips at their own width stand
-    // at least as strong in the top-hat as their fragments do, so the larger
-    // lattice takes over when its blobs are as strong and hold most of the
-    // smaller one's.
-    if let Some(bi) = best {
-        let b = &cands[bi];
-        let mut bigger: Option<usize> = None;
-        for (i, c) in cands.iter().enumerate() {
-            let holds = c.w >= 2.0 * b.w
-                && c.score >= 2
-                && c.peak >= 0.8 * b.peak
-                && share_inside(b, c) >= 0.5;
-            if holds && bigger.is_none_or(|g| c.score > cands[g].score) {
-                bigger = Some(i);
-            }
+    // The choice is then checked at full resolution: its blobs, measured
+    // as the inspection measures them at the tip width its spacings imply,
+    // must be tips of that width ([`tips_hold`]). A lattice of every other
+    // tip (a missing or damaged pin leaves only spacings of two pitches)
+    // implies twice the tip width, and the tips measure a quarter of the
+    // area it implies; fragments of large tips run out of their window.
+    // Such a choice gives way to the next one.
+    let mut first: Option<Candidate> = None;
+    let mut chosen: Option<Candidate> = None;
+    while let Some(bi) = choose(&cands) {
+        let c = cands.swap_remove(bi);
+        if tips_hold(plane, sign, recipe, &c).is_some() {
+            chosen = Some(c);
+            break;
         }
-        if bigger.is_some() {
-            best = bigger;
-        }
+        first.get_or_insert(c);
     }
-    let Some(b) = best.map(|i| cands.swap_remove(i)) else {
+    // No lattice at one pitch holds: pins left only two or three pitches
+    // apart (a 1 × 3 part without its middle pin, a 1 × 5 missing one and
+    // with one damaged). The spacings are then read as two or three
+    // pitches, and the tips' own measured width (the second ruler) decides
+    // which: the candidate whose tips measure closest to the width its
+    // pitch implies.
+    if chosen.is_none() {
+        let n_max = recipe.cols.max(recipe.rows);
+        let mut multi: Vec<(Candidate, f64)> = Vec::new();
+        let mut w = w_max;
+        let mut i = 0;
+        while w >= W_MIN {
+            if i == tried.len() {
+                let pts = blobs_at(w)?;
+                tried.push((w, pts));
+            }
+            let (wt, pts) = &tried[i];
+            for mult in [2.0, 3.0] {
+                if (n_max as f64) <= mult {
+                    continue;
+                }
+                let c = score_blobs(recipe, pts, *wt, mult);
+                if c.score > 0
+                    && let Some(r) = tips_hold(plane, sign, recipe, &c)
+                {
+                    multi.push((c, r));
+                }
+            }
+            i += 1;
+            w /= 1.2;
+        }
+        let top = multi.iter().map(|m| m.0.peak).fold(0.0, f64::max);
+        multi.retain(|m| m.0.peak >= PEAK_SHARE * top);
+        chosen = multi
+            .into_iter()
+            .max_by(|a, b| {
+                a.0.score
+                    .cmp(&b.0.score)
+                    .then(b.1.ln().abs().total_cmp(&a.1.ln().abs()))
+            })
+            .map(|m| m.0);
+    }
+    let Some(b) = chosen.or(first) else {
         return Err(no_pins(format!(
             "no tip-sized blobs in a row at the recipe's pitch-to-tip ratio ({:.2}) for any tip width from {W_MIN} to {w_max:.0} px (mm_per_px absent, so the scale had to be found)",
             recipe.pitch_mm[0] / recipe.pin_mm
@@ -370,6 +522,7 @@ mod tests {
             widths: Vec::new(),
             w,
             peak: 1.0,
+            boxes: vec![[0.0; 4]; pts.len()],
             pts,
         }
     }
@@ -403,10 +556,10 @@ mod tests {
         }
         let mut coarse = Coarse { w, h, k: 1, data };
         let r = recipe(1, 6, "");
-        assert_eq!(score_candidate(&r, &coarse, 6.0).score, 0);
+        assert_eq!(score_candidate(&r, &coarse, 6.0, 1.0).score, 0);
         // The same bumps inside the frame are a lattice.
         coarse.data.rotate_right(20 * w);
-        assert_eq!(score_candidate(&r, &coarse, 6.0).score, 6);
+        assert_eq!(score_candidate(&r, &coarse, 6.0, 1.0).score, 6);
     }
 
     #[test]
@@ -421,5 +574,65 @@ mod tests {
         let (mut a, b) = (cand(17.0, vec![(1.0, 1.0)]), cand(6.9, vec![(1.0, 1.0)]));
         a.peak = b.peak;
         assert_eq!(best_candidate(&[a, b]), Some(0));
+    }
+
+    fn estimate_on(
+        r: &Recipe,
+        mm_per_px: f64,
+        missing: &[u32],
+    ) -> Result<ScaleEstimate, VisionError> {
+        use super::super::gray::GrayData;
+        use super::super::synth::Scene;
+        let mut scene = Scene::nominal(r, mm_per_px);
+        scene.blur_px = 0.8;
+        for p in scene.pins.iter_mut() {
+            if missing.contains(&p.col) {
+                p.present = false;
+            }
+        }
+        let (g, _) = scene.render();
+        let (w, h) = (g.width as usize, g.height as usize);
+        let fs = g.full_scale();
+        match &g.data {
+            GrayData::U8(d) => estimate(
+                &Plane {
+                    w,
+                    h,
+                    data: d.as_slice(),
+                },
+                1.0,
+                r,
+                fs,
+            ),
+            GrayData::U16(d) => estimate(
+                &Plane {
+                    w,
+                    h,
+                    data: d.as_slice(),
+                },
+                1.0,
+                r,
+                fs,
+            ),
+        }
+    }
+
+    /// A 1 × 5 part with pins 1 and 3 missing: the tips left lie two
+    /// pitches apart, a lattice of the recipe's ratio at twice the tip
+    /// width. Measured at full resolution they are a quarter of that
+    /// width's area, so the scale is read from spacings of two pitches,
+    /// the tips' own width deciding.
+    #[test]
+    fn every_other_tip_is_not_the_lattice() {
+        let r = recipe(1, 5, "");
+        // 0.5 mm tips at 0.04 mm/px: 12.5 px, pitch 50 px.
+        let e = estimate_on(&r, 0.04, &[1, 3]).expect("a scale");
+        assert!((e.pin_px / 12.5 - 1.0).abs() < 0.05, "{e:?}");
+        // Every pin present: the lattice itself, as before.
+        let e = estimate_on(&r, 0.04, &[]).expect("a scale");
+        assert!((e.pin_px / 12.5 - 1.0).abs() < 0.05, "{e:?}");
+        // 1 × 3 without its middle pin: one spacing of two pitches.
+        let e = estimate_on(&recipe(1, 3, ""), 0.04, &[1]).expect("a scale");
+        assert!((e.pin_px / 12.5 - 1.0).abs() < 0.05, "{e:?}");
     }
 }
