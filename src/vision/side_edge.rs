@@ -27,8 +27,8 @@ const DARK_QUANTILE: f64 = 0.99;
 /// The silhouette's level is the median of what lies beyond a first
 /// threshold halfway to the darkest 1 % (noise puts that quantile past the
 /// housing's level, and a threshold from it alone cut thin pins under
-/// noise: 400 202). Where the silhouette is under 1 % of the frame the
-/// quantile is backlight and Otsu stands.
+/// noise: 400 202). Where nothing beyond Otsu's threshold lies twice as
+/// far from the backlight, Otsu stands.
 pub(super) fn silhouette_threshold(data: &[f32], otsu: f32) -> f32 {
     if data.is_empty() {
         return otsu;
@@ -259,11 +259,9 @@ mod tests {
         d.extend([-600.0; 10]);
         let t = silhouette_threshold(&d, -930.0);
         assert!((t + 800.0).abs() < 1e-3, "{t}");
-        // A silhouette under 1 % leaves Otsu's threshold.
-        let d: Vec<f32> = (0..1000)
-            .map(|i| if i < 5 { -600.0 } else { -1000.0 })
-            .collect();
-        assert_eq!(silhouette_threshold(&d, -850.0), -850.0);
+        // Backlight alone (no silhouette): Otsu's threshold stands.
+        let d: Vec<f32> = (0..1000).map(|i| -1000.0 + (i % 100) as f32).collect();
+        assert_eq!(silhouette_threshold(&d, -950.0), -950.0);
     }
 
     #[test]
