@@ -25,6 +25,9 @@ use super::label;
 use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
 use super::result::*;
+use super::side_edge::{
+    body_x_range, drop_steep_tops, edge_profile, run_tops, silhouette_threshold,
+};
 use super::side_row::{
     bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
     tip_crossing_recentred,
@@ -40,37 +43,6 @@ struct Bar {
     /// Along-row coordinate of the tip (projection on the edge direction), px.
     u_px: f64,
     height_px: f64,
-}
-
-/// Largest step (coarse px) between neighbouring columns' run tops on an
-/// edge the housing's top can be: a top edge tilted up to
-/// [`grid::MAX_TILT_DEG`] moves 0.2 px a column, a side edge of a block
-/// rotated that much 4.7 px or more.
-const MAX_TOP_STEP: f64 = 3.0;
-
-/// The run tops (column, top row; sorted by column) without those on a
-/// steep edge: a top whose neighbouring columns' tops both lie more than
-/// [`MAX_TOP_STEP`] away. A housing block taller than wide, rotated, shows
-/// one of its sides to the columns as a staircase of run tops (each column
-/// left of that side starts its run where the side crosses it); in a tall
-/// frame those outnumber the top edge's columns, and the robust line then
-/// found the side (tilted 85°). A column without a neighbouring top (an
-/// isolated run) is kept: the robust line decides.
-fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let near = |i: usize, j: Option<usize>| {
-        j.and_then(|j| tops.get(j))
-            .filter(|q| (q.0 - tops[i].0).abs() == 1.0)
-            .map(|q| (q.1 - tops[i].1).abs() <= MAX_TOP_STEP)
-    };
-    (0..tops.len())
-        .filter(
-            |&i| match (near(i, i.checked_sub(1)), near(i, Some(i + 1))) {
-                (None, None) => true,
-                (l, r) => l.unwrap_or(false) || r.unwrap_or(false),
-            },
-        )
-        .map(|i| tops[i])
-        .collect()
 }
 
 /// Least contrast of a dust shadow, as a fraction of the silhouette's
@@ -107,6 +79,11 @@ pub fn inspect_side<P: Px>(
     }
     let (cw, ch) = (coarse.w, coarse.h);
     let t = detect::otsu(&coarse.data, cw, ch);
+    let t = if sign < 0.0 {
+        silhouette_threshold(&coarse.data, t)
+    } else {
+        t
+    };
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
     // 1. Housing edge, coarse: top of the longest silhouette run per column.
@@ -117,27 +94,7 @@ pub fn inspect_side<P: Px>(
     let min_run = pin_px_prior.map_or(3, |p| {
         ((0.5 * p / k as f64) as usize).clamp(3, (ch / 40).max(3))
     });
-    let mut tops: Vec<(f64, f64)> = Vec::new();
-    for x in 0..cw {
-        let (mut best, mut best_start, mut run, mut start) = (0usize, 0usize, 0usize, 0usize);
-        for y in 0..ch {
-            if fg(x, y) {
-                if run == 0 {
-                    start = y;
-                }
-                run += 1;
-                if run > best {
-                    best = run;
-                    best_start = start;
-                }
-            } else {
-                run = 0;
-            }
-        }
-        if best >= min_run {
-            tops.push((x as f64, best_start as f64));
-        }
-    }
+    let tops = run_tops(cw, ch, &fg, min_run);
     let tops = drop_steep_tops(&tops);
     let no_housing =
         |msg: &str| VisionError::NoHousing(format!("{msg} (recipe {part}, side view)"));
@@ -214,9 +171,13 @@ pub fn inspect_side<P: Px>(
 
     // 3. Sub-pixel housing edge: half-level crossings in columns clear of bars.
     let kf = k as f64;
+    let bodies: Vec<(u32, u32)> = bar_blobs
+        .iter()
+        .map(|b| body_x_range(b, &lab.runs))
+        .collect();
     let near_bar = |xf: f64| {
-        bar_blobs.iter().any(|b| {
-            xf >= (b.x_min as f64 - 1.0) * kf - 2.0 && xf <= (b.x_max as f64 + 2.0) * kf + 2.0
+        bodies.iter().any(|&(x0, x1)| {
+            xf >= (x0 as f64 - 1.0) * kf - 2.0 && xf <= (x1 as f64 + 2.0) * kf + 2.0
         })
     };
     let half = (3 * k + 4) as i64;
@@ -224,16 +185,18 @@ pub fn inspect_side<P: Px>(
     let x_lo = (hx0_c + 1) * k;
     let x_hi = hx1_c.saturating_sub(1) * k;
     let step = (k / 2).max(1);
+    let span = step;
     let mut xi = x_lo;
     while xi < x_hi.min(plane.w) {
         let xf = xi as f64;
         let c = (xi / k).min(cw - 1);
-        if col_is_edge[c] && !near_bar(xf) {
+        let clear = !near_bar(xf) && !near_bar(xf - span as f64) && !near_bar(xf + span as f64);
+        if col_is_edge[c] && clear {
             let (_, yc) = coarse.to_full(0.0, edge_c(c as f64));
             let y0 = (yc.round() as i64 - half).max(0) as usize;
             let y1 = ((yc.round() as i64 + half) as usize).min(plane.h - 1);
             if y1 > y0 + 6 {
-                let prof: Vec<f32> = (y0..=y1).map(|y| sign * plane.at(xi, y)).collect();
+                let prof = edge_profile(plane, sign, xi, (y0, y1), span, coarse_line.line.b);
                 let mut top: Vec<f32> = prof[..3].to_vec();
                 let mut bot: Vec<f32> = prof[prof.len() - 3..].to_vec();
                 let (lo, hi) = (median_f32(&mut top), median_f32(&mut bot));
@@ -750,51 +713,4 @@ pub fn inspect_side<P: Px>(
         found,
         warnings,
     ))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Run tops of a housing block 30 columns wide and much taller than
-    /// the frame shows, rotated 4.4°: the top edge (with three pins on
-    /// it) and, right of it, the staircase its side leaves (12.9 rows a
-    /// column), longer than the top edge.
-    fn tall_block_tops() -> Vec<(f64, f64)> {
-        let slope = 4.4f64.to_radians().tan();
-        let mut tops = Vec::new();
-        for x in 0..30 {
-            let mut y = 100.0 + slope * x as f64;
-            if [5, 6, 15, 16, 25].contains(&x) {
-                y -= 20.0; // pins
-            }
-            tops.push((x as f64, y.round()));
-        }
-        for x in 30..70 {
-            let y = 100.0 + slope * 30.0 + (x - 29) as f64 / slope;
-            tops.push((x as f64, y.round()));
-        }
-        tops
-    }
-
-    #[test]
-    fn a_tall_blocks_side_is_not_its_top_edge() {
-        let tops = tall_block_tops();
-        // All tops: the staircase wins (the error this guards against).
-        let all = fit::robust_line(&tops, 1.5).unwrap();
-        assert!(all.line.b.atan().to_degrees().abs() > 45.0);
-        let kept = drop_steep_tops(&tops);
-        assert!(kept.iter().all(|p| p.0 < 31.0));
-        let l = fit::robust_line(&kept, 1.5).unwrap();
-        assert!((l.line.b.atan().to_degrees() - 4.4).abs() < 1.0);
-    }
-
-    #[test]
-    fn tops_of_a_flat_edge_and_isolated_runs_are_kept() {
-        let tops: Vec<(f64, f64)> = (0..20)
-            .map(|x| (x as f64, 50.0 + (x % 3) as f64))
-            .chain([(40.0, 10.0)])
-            .collect();
-        assert_eq!(drop_steep_tops(&tops).len(), tops.len());
-    }
 }

@@ -1,0 +1,314 @@
+//! The side view's housing edge, coarse: the silhouette's threshold, each
+//! column's longest silhouette run (its top is the housing's top edge where
+//! no pin stands), and the columns near a pin left out of the sub-pixel
+//! edge. Kept apart from `side.rs` (the pipeline).
+
+use super::gray::{Plane, Px};
+use super::label::{Blob, Run};
+
+/// The backlight's level after `backlight::normalise_backlight` (sign
+/// space: the silhouette above it).
+const BACKLIGHT: f32 = -1000.0;
+
+/// Share of the frame the darkest silhouette quantile is read at: the
+/// housing block covers more than 1 % of any side view that shows it.
+const DARK_QUANTILE: f64 = 0.99;
+
+/// The silhouette's threshold on the backlight-normalised coarse image:
+/// Otsu's, but never nearer the backlight than halfway from it to the
+/// silhouette's level (an opaque silhouette's edge lies at that half level
+/// whatever the blur). When the silhouette covers a few per cent of the
+/// frame and the backlight varies more than the cubic backlight model
+/// follows (vignetting times a gradient across a small part), Otsu splits
+/// the backlight itself (at 93 % of it on py 540 143, contrast 0.40): the
+/// frame's dimmer patches became silhouette, stood above the housing as
+/// "pins" as wide as the frame, and left no column for the housing edge.
+///
+/// The silhouette's level is the median of what lies beyond a first
+/// threshold halfway to the darkest 1 % (noise puts that quantile past the
+/// housing's level, and a threshold from it alone cut thin pins under
+/// noise: 400 202). Where nothing beyond Otsu's threshold lies twice as
+/// far from the backlight, Otsu stands.
+pub(super) fn silhouette_threshold(data: &[f32], otsu: f32) -> f32 {
+    if data.is_empty() {
+        return otsu;
+    }
+    let mut v = data.to_vec();
+    let q = ((v.len() - 1) as f64 * DARK_QUANTILE) as usize;
+    let dark = *v.select_nth_unstable_by(q, |a, b| a.total_cmp(b)).1;
+    let first = otsu.max(0.5 * (BACKLIGHT + dark));
+    let mut beyond: Vec<f32> = data.iter().copied().filter(|&x| x > first).collect();
+    if beyond.is_empty() {
+        return otsu;
+    }
+    let m = beyond.len() / 2;
+    let level = *beyond.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1;
+    otsu.max(0.5 * (BACKLIGHT + level))
+}
+
+/// Each column's longest silhouette run of at least `min_run` coarse px,
+/// as (column, top row), sorted by column. A run that starts on the
+/// frame's top border is left out: its top is the frame, not an edge, and
+/// the housing's top edge lies inside the frame with the pins above it.
+/// Under a backlight the cubic model does not follow (a gradient across a
+/// narrow part, 800 126), a dim corner of the frame passed the threshold;
+/// its runs, all starting at row 0, outnumbered a 1 × 2 part's edge
+/// columns and the robust line lay along the frame's top.
+pub(super) fn run_tops(
+    cw: usize,
+    ch: usize,
+    fg: &dyn Fn(usize, usize) -> bool,
+    min_run: usize,
+) -> Vec<(f64, f64)> {
+    let mut tops = Vec::new();
+    for x in 0..cw {
+        let (mut best, mut best_start, mut run, mut start) = (0usize, 0usize, 0usize, 0usize);
+        for y in 0..ch {
+            if fg(x, y) {
+                if run == 0 {
+                    start = y;
+                }
+                run += 1;
+                if start > 0 && run > best {
+                    best = run;
+                    best_start = start;
+                }
+            } else {
+                run = 0;
+            }
+        }
+        if best >= min_run {
+            tops.push((x as f64, best_start as f64));
+        }
+    }
+    tops
+}
+
+/// Columns (coarse, inclusive) a bar stands on: the median left and right
+/// ends of its rows in its lower half, leaving out the foot (rows more than
+/// half as wide again as the bar's median row). The label reaches down to
+/// 1.5 coarse px above the coarse edge, where the housing's blurred top
+/// edge still passes the threshold, and noise pixels cling to a bar's
+/// sides: the bounding box of a 1 × 4 part's 6.5 px pins (800 205, blur
+/// 2.1 px, noise 8.4 DN) was 12–14 px wide on a 22 px pitch, which left no
+/// column between the pins for the sub-pixel edge. The lower half, not the
+/// whole bar: in a tilted view the base stands to the side of the tip.
+pub(super) fn body_x_range(b: &Blob, runs: &[Run]) -> (u32, u32) {
+    let h = (b.y_max - b.y_min + 1) as usize;
+    let mut rows = vec![(u32::MAX, 0u32); h];
+    for &i in &b.runs {
+        let r = runs[i as usize];
+        if r.x1 > r.x0 {
+            let e = &mut rows[(r.y - b.y_min) as usize];
+            e.0 = e.0.min(r.x0);
+            e.1 = e.1.max(r.x1 - 1);
+        }
+    }
+    let width = |e: &(u32, u32)| (e.1 + 1).saturating_sub(e.0);
+    let mut w: Vec<u32> = rows.iter().filter(|e| e.0 <= e.1).map(width).collect();
+    if w.is_empty() {
+        return (b.x_min, b.x_max);
+    }
+    let m = w.len() / 2;
+    let w_med = *w.select_nth_unstable(m).1;
+    let (mut l, mut r): (Vec<u32>, Vec<u32>) = rows[h / 2..]
+        .iter()
+        .filter(|e| e.0 <= e.1 && 2 * width(e) <= 3 * w_med + 2)
+        .map(|e| (e.0, e.1))
+        .unzip();
+    if l.is_empty() {
+        return (b.x_min, b.x_max);
+    }
+    let m = l.len() / 2;
+    (*l.select_nth_unstable(m).1, *r.select_nth_unstable(m).1)
+}
+
+/// The profile (sign space) down column `xi` over rows `ys` (inclusive),
+/// averaged over the columns `xi ± span` along the coarse edge's `slope`
+/// (bilinear). One column's first half-level crossing under heavy noise is
+/// a noise spike in the backlight above the edge: on py 530 092 (noise
+/// 11.5 DN on a 52 DN step, one column per point) the robust line took a
+/// chance alignment of such spikes 17 px above the housing and every pin
+/// was short. The mean along the edge leaves the crossing where it is.
+pub(super) fn edge_profile<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    xi: usize,
+    ys: (usize, usize),
+    span: usize,
+    slope: f64,
+) -> Vec<f32> {
+    let (xmax, ymax) = ((plane.w - 1) as f64, (plane.h - 1) as f64);
+    let n = (2 * span + 1) as f32;
+    (ys.0..=ys.1)
+        .map(|y| {
+            (-(span as i64)..=span as i64)
+                .map(|d| {
+                    let x = (xi as f64 + d as f64).clamp(0.0, xmax);
+                    let yy = (y as f64 + slope * d as f64).clamp(0.0, ymax);
+                    sign * plane.bilinear(x, yy)
+                })
+                .sum::<f32>()
+                / n
+        })
+        .collect()
+}
+
+/// Largest step (coarse px) between neighbouring columns' run tops on an
+/// edge the housing's top can be: a top edge tilted up to
+/// [`grid::MAX_TILT_DEG`] moves 0.2 px a column, a side edge of a block
+/// rotated that much 4.7 px or more.
+const MAX_TOP_STEP: f64 = 3.0;
+
+/// The run tops (column, top row; sorted by column) without those on a
+/// steep edge: a top whose neighbouring columns' tops both lie more than
+/// [`MAX_TOP_STEP`] away. A housing block taller than wide, rotated, shows
+/// one of its sides to the columns as a staircase of run tops (each column
+/// left of that side starts its run where the side crosses it); in a tall
+/// frame those outnumber the top edge's columns, and the robust line then
+/// found the side (tilted 85°). A column without a neighbouring top (an
+/// isolated run) is kept: the robust line decides.
+pub(super) fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let near = |i: usize, j: Option<usize>| {
+        j.and_then(|j| tops.get(j))
+            .filter(|q| (q.0 - tops[i].0).abs() == 1.0)
+            .map(|q| (q.1 - tops[i].1).abs() <= MAX_TOP_STEP)
+    };
+    (0..tops.len())
+        .filter(
+            |&i| match (near(i, i.checked_sub(1)), near(i, Some(i + 1))) {
+                (None, None) => true,
+                (l, r) => l.unwrap_or(false) || r.unwrap_or(false),
+            },
+        )
+        .map(|i| tops[i])
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vision::fit;
+
+    /// Run tops of a housing block 30 columns wide and much taller than
+    /// the frame shows, rotated 4.4°: the top edge (with three pins on
+    /// it) and, right of it, the staircase its side leaves (12.9 rows a
+    /// column), longer than the top edge.
+    fn tall_block_tops() -> Vec<(f64, f64)> {
+        let slope = 4.4f64.to_radians().tan();
+        let mut tops = Vec::new();
+        for x in 0..30 {
+            let mut y = 100.0 + slope * x as f64;
+            if [5, 6, 15, 16, 25].contains(&x) {
+                y -= 20.0; // pins
+            }
+            tops.push((x as f64, y.round()));
+        }
+        for x in 30..70 {
+            let y = 100.0 + slope * 30.0 + (x - 29) as f64 / slope;
+            tops.push((x as f64, y.round()));
+        }
+        tops
+    }
+
+    #[test]
+    fn a_tall_blocks_side_is_not_its_top_edge() {
+        let tops = tall_block_tops();
+        // All tops: the staircase wins (the error this guards against).
+        let all = fit::robust_line(&tops, 1.5).unwrap();
+        assert!(all.line.b.atan().to_degrees().abs() > 45.0);
+        let kept = drop_steep_tops(&tops);
+        assert!(kept.iter().all(|p| p.0 < 31.0));
+        let l = fit::robust_line(&kept, 1.5).unwrap();
+        assert!((l.line.b.atan().to_degrees() - 4.4).abs() < 1.0);
+    }
+
+    #[test]
+    fn tops_of_a_flat_edge_and_isolated_runs_are_kept() {
+        let tops: Vec<(f64, f64)> = (0..20)
+            .map(|x| (x as f64, 50.0 + (x % 3) as f64))
+            .chain([(40.0, 10.0)])
+            .collect();
+        assert_eq!(drop_steep_tops(&tops).len(), tops.len());
+    }
+
+    #[test]
+    fn a_dim_corner_at_the_frames_top_is_no_housing_edge() {
+        // A 60 x 40 coarse frame: a dim corner (columns 0-39) passes the
+        // threshold from row 0 to row 14; the housing (columns 44-55)
+        // from row 20 down, and runs from the frame's top are longer.
+        let fg = |x: usize, y: usize| (x < 40 && y < 15) || ((44..56).contains(&x) && y >= 20);
+        let tops = run_tops(60, 40, &fg, 3);
+        assert_eq!(tops.len(), 12);
+        assert!(tops.iter().all(|p| p.1 == 20.0));
+    }
+
+    #[test]
+    fn the_threshold_stays_halfway_to_the_silhouette() {
+        // Backlight at -1000 with dim patches to -900, a silhouette of 5 %
+        // at -600 (its darkest pixels at -500 under noise): a threshold at
+        // -930 is raised to -800, halfway to the silhouette's median.
+        let mut d: Vec<f32> = (0..950).map(|i| -1000.0 + (i % 10) as f32 * 10.0).collect();
+        d.extend((0..50).map(|i| {
+            if i % 2 == 0 {
+                -600.0
+            } else {
+                -640.0 + i as f32 * 3.0
+            }
+        }));
+        d.extend([-600.0; 10]);
+        let t = silhouette_threshold(&d, -930.0);
+        assert!((t + 800.0).abs() < 1e-3, "{t}");
+        // Backlight alone (no silhouette): Otsu's threshold stands.
+        let d: Vec<f32> = (0..1000).map(|i| -1000.0 + (i % 100) as f32).collect();
+        assert_eq!(silhouette_threshold(&d, -950.0), -950.0);
+    }
+
+    #[test]
+    fn a_bars_body_leaves_out_its_foot() {
+        // A bar 4 columns wide (10-13), rows 0-19, whose lowest rows spread
+        // along the edge (columns 5-18).
+        let mut runs = Vec::new();
+        for y in 0..20u32 {
+            let (x0, x1) = match y {
+                17.. => (5, 19),
+                // A noise pixel clinging to the bar's left side.
+                12 => (8, 14),
+                _ => (10, 14),
+            };
+            runs.push(Run { y, x0, x1 });
+        }
+        let lab = crate::vision::label::label(30, 20, |x, y| {
+            let r = runs[y];
+            (r.x0 as usize..r.x1 as usize).contains(&x)
+        });
+        let b = &lab.blobs[0];
+        assert_eq!((b.x_min, b.x_max), (5, 18));
+        assert_eq!(body_x_range(b, &lab.runs), (10, 13));
+    }
+
+    #[test]
+    fn the_edge_crossing_survives_a_noise_spike_above_the_edge() {
+        // A step from 200 (backlight) to 150 (housing) at row 20 in a
+        // 9-column strip; one column has a spike to 170 at row 12. Its own
+        // profile's first half-level crossing is the spike; the mean over
+        // the strip crosses at the edge.
+        let (w, h) = (9usize, 40usize);
+        let mut d = vec![0u8; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                d[y * w + x] = if y >= 20 { 150 } else { 200 };
+            }
+        }
+        d[12 * w + 4] = 170;
+        let plane = Plane { w, h, data: &d[..] };
+        let cross = |p: &[f32]| {
+            let level = 0.5 * (p[0] + p[p.len() - 1]);
+            crate::vision::side_row::first_rise(p, level).unwrap()
+        };
+        let one = edge_profile(&plane, -1.0, 4, (0, 39), 0, 0.0);
+        assert!((cross(&one) - 11.5).abs() < 0.6, "{}", cross(&one));
+        let mean = edge_profile(&plane, -1.0, 4, (0, 39), 4, 0.0);
+        assert!((cross(&mean) - 19.5).abs() < 0.01, "{}", cross(&mean));
+    }
+}
