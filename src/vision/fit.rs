@@ -281,7 +281,7 @@ pub fn consensus_similarity(
     // with one pin bent (unit test in `synth_envelope`, blurred tips off
     // centre). From four points on, a pair leaves two checks.
     let n = model.len();
-    if n < 4 || n > CONSENSUS_MAX_POINTS || image.len() != n || !(tau_px > 0.0) {
+    if !(4..=CONSENSUS_MAX_POINTS).contains(&n) || image.len() != n || !(tau_px > 0.0) {
         return from_init;
     }
     let mut best: Option<(f64, Similarity)> = None;
