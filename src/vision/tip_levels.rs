@@ -224,15 +224,12 @@ mod tests {
         d
     }
 
-    fn levels_of(d: &[u16]) -> (f64, f64) {
-        let plane = Plane {
-            w: 40,
-            h: 40,
-            data: d,
-        };
+    /// The blob at (20, 20) of a 40 × 40 patch, measured as the top view
+    /// measures a candidate.
+    fn measured(plane: &Plane<'_, u16>) -> super::super::measure::BlobMeasure {
         let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 7.0, 40, 40);
-        let m = super::super::measure::measure_blob(
-            &plane,
+        super::super::measure::measure_blob(
+            plane,
             1.0,
             roi,
             (20.0, 20.0),
@@ -240,7 +237,16 @@ mod tests {
             2,
             None,
         )
-        .expect("a blob");
+        .expect("a blob")
+    }
+
+    fn levels_of(d: &[u16]) -> (f64, f64) {
+        let plane = Plane {
+            w: 40,
+            h: 40,
+            data: d,
+        };
+        let m = measured(&plane);
         // The smallest extra the default rule counts: 0.25 of a 120 px² tip.
         let core =
             core_contrast(&plane, 1.0, (m.x, m.y), 0.25 * 120.0, 200.0, 100.0).expect("a core");
@@ -285,17 +291,7 @@ mod tests {
             h: 40,
             data: d,
         };
-        let roi = Roi::around(20.0, 20.0, 20.0, 20.0, 7.0, 40, 40);
-        let m = super::super::measure::measure_blob(
-            &plane,
-            1.0,
-            roi,
-            (20.0, 20.0),
-            super::super::measure::Localiser::Coverage,
-            2,
-            None,
-        )
-        .expect("a blob");
+        let m = measured(&plane);
         let core_px = 0.25 * 120.0;
         let core = core_contrast(&plane, 1.0, (m.x, m.y), core_px, 200.0, 100.0).expect("a core");
         let sd = core_sigma(m.noise, core_px, 200.0, 100.0);
