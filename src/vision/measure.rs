@@ -144,6 +144,17 @@ pub const CENTRE_LEVEL: f32 = 0.5;
 /// upper-part one; blended linearly between.
 pub const CENTRE_BLUR: (f64, f64) = (0.6, 1.5);
 
+/// The window margin (px beyond a blob's box) and the mask dilation (px)
+/// every tip measurement uses for tips `pin_px` wide: 0.45 of a tip (at
+/// least 4 px) and 0.12 of a tip (at least 2 px), so that the scale
+/// search, the top view and the side view's dust measure a blob alike.
+pub fn tip_window(pin_px: f64) -> (f64, usize) {
+    (
+        (0.45 * pin_px).max(4.0),
+        ((0.12 * pin_px).round() as usize).max(2),
+    )
+}
+
 /// Measures the blob nearest `seed` inside `roi`.
 ///
 /// `dilate` is how far (px) beyond the half-level mask the coverage window

@@ -308,8 +308,7 @@ fn tips_hold<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe, c: &Candidate)
     let s = pitch_px / recipe.pitch_mm[0];
     let pin_px = s * recipe.pin_mm;
     let tip_area = recipe.tip_area_mm2() * s * s;
-    let margin = (0.45 * pin_px).max(4.0);
-    let dilate = ((0.12 * pin_px).round() as usize).max(2);
+    let (margin, dilate) = measure::tip_window(pin_px);
     let mut ratios = Vec::new();
     let mut checked = 0usize;
     for (&(x, y), b) in c.pts.iter().zip(&c.boxes).take(MAX_CHECKED) {

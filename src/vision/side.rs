@@ -602,14 +602,14 @@ pub fn inspect_side<P: Px>(
             });
         }
     }
-    let dilate = ((0.12 * pin_px_prior).round() as usize).max(2);
+    let (margin, dilate) = super::measure::tip_window(pin_px_prior);
     for d in &dust_blobs {
         let roi = Roi::around(
             d.x_min as f64 * kf,
             d.y_min as f64 * kf,
             (d.x_max as f64 + 1.0) * kf - 1.0,
             (d.y_max as f64 + 1.0) * kf - 1.0,
-            (0.45 * pin_px_prior).max(4.0),
+            margin,
             plane.w,
             plane.h,
         );

@@ -32,8 +32,7 @@ fn measure_candidates<P: Px>(
     opts: &InspectOptions,
 ) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
     let k = cs.coarse.k as f64;
-    let margin = (0.45 * pin_px).max(4.0);
-    let dilate = ((0.12 * pin_px).round() as usize).max(2);
+    let (margin, dilate) = super::measure::tip_window(pin_px);
     let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(cs.blobs.len());
     for cb in &cs.blobs {
         let b = &cb.blob;
@@ -461,7 +460,7 @@ pub fn inspect_top<P: Px>(
         .map(|(_, c)| (c.m.x, c.m.y, c.m.hi, bg_at(c.m.x, c.m.y)))
         .collect();
     let levels = LocalLevels { refs };
-    let dilate = ((0.12 * pin_px0).round() as usize).max(2);
+    let (_, dilate) = super::measure::tip_window(pin_px0);
     // Second look at each empty position, with the locally expected
     // contrast: a dim tip the coarse threshold missed (a dark corner, low
     // gain) is found here; what is there otherwise is said in the reason.
