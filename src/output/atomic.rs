@@ -525,16 +525,7 @@ impl Report {
             if n.contains(TMP_MARK) || tops.contains(&n) {
                 continue;
             }
-            carried += 1;
-            if carried > MAX_CARRIED {
-                return Ok(false);
-            }
-            let Ok(ft) = e.file_type() else {
-                return Ok(false);
-            };
-            // Folders cannot be hard-linked: they are moved across after
-            // the switch (and put back by a sweep if we die before).
-            if !ft.is_dir() && std::fs::hard_link(e.path(), self.stage.join(n)).is_err() {
+            if !carry(&e, &self.stage.join(n), &mut carried) {
                 return Ok(false);
             }
         }
@@ -602,8 +593,40 @@ impl Drop for Report {
     }
 }
 
-/// Moves every entry of `from` that `to` lacks into `to` (folders that
-/// could not be hard-linked, files that appeared during the switch).
+/// Carries one entry of `--out` into the staging folder: a file (or a
+/// symbolic link, not followed) as a hard link; a folder as a new folder
+/// of the same permissions holding hard links of its whole tree, so the
+/// user's subfolders are in the new folder at the instant of the exchange
+/// (a kill just after it must not leave them only in the old folder moved
+/// aside). Counts every entry against [`MAX_CARRIED`]; `false` when the
+/// tree is too large or cannot be linked (another filesystem mounted
+/// inside, an unreadable folder): the caller then renames instead.
+fn carry(e: &std::fs::DirEntry, to: &Path, carried: &mut usize) -> bool {
+    *carried += 1;
+    if *carried > MAX_CARRIED {
+        return false;
+    }
+    let Ok(ft) = e.file_type() else {
+        return false;
+    };
+    if !ft.is_dir() {
+        return std::fs::hard_link(e.path(), to).is_ok();
+    }
+    let Ok(rd) = std::fs::read_dir(e.path()) else {
+        return false;
+    };
+    if std::fs::create_dir(to).is_err() {
+        return false;
+    }
+    if let Ok(meta) = e.metadata() {
+        let _ = std::fs::set_permissions(to, meta.permissions());
+    }
+    rd.into_iter()
+        .all(|c| c.is_ok_and(|c| carry(&c, &to.join(c.file_name()), carried)))
+}
+
+/// Moves every entry of `from` that `to` lacks into `to` (files that
+/// appeared in `--out` during the switch).
 fn restore_missing(from: &Path, to: &Path) -> Result<(), String> {
     let rd = std::fs::read_dir(from).map_err(|e| format!("{}: {e}", from.display()))?;
     for e in rd.flatten() {

@@ -117,6 +117,60 @@ fn a_switch_keeps_everything_else_in_the_folder() {
 }
 
 #[test]
+fn the_users_subfolders_are_in_the_new_folder_at_the_exchange() {
+    // A kill right after the exchange must not leave the user's subfolder
+    // only in the old folder moved aside: the staged folder holds its
+    // whole tree (hard links of the files, new folders) before the switch.
+    use std::os::unix::fs::MetadataExt;
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir_all(out.join("sub/deeper")).unwrap();
+    std::fs::write(out.join("sub/keep.txt"), b"mine").unwrap();
+    std::fs::write(out.join("sub/deeper/more.txt"), b"also").unwrap();
+    std::os::unix::fs::symlink("keep.txt", out.join("sub/link")).unwrap();
+    let ino = std::fs::metadata(out.join("sub/deeper/more.txt"))
+        .unwrap()
+        .ino();
+    let mut r = Report::new_in(&out).unwrap();
+    r.add("a.json", b"new").unwrap();
+    let stage = r.stage.clone();
+    let mut carried = 0;
+    for e in std::fs::read_dir(&out).unwrap() {
+        let e = e.unwrap();
+        assert!(carry(&e, &stage.join(e.file_name()), &mut carried));
+    }
+    assert_eq!(carried, 5, "sub, keep.txt, deeper, more.txt, link");
+    let staged = stage.join("sub/deeper/more.txt");
+    assert_eq!(std::fs::metadata(&staged).unwrap().ino(), ino);
+    assert!(
+        std::fs::symlink_metadata(stage.join("sub/link"))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    drop(r);
+    // And through a whole commit: same files, same inodes, nothing beside.
+    let mut r = Report::new_in(&out).unwrap();
+    r.add("a.json", b"new").unwrap();
+    assert_eq!(r.commit_with_mode().unwrap().1, CommitMode::Switch);
+    assert_eq!(
+        std::fs::read(out.join("sub/deeper/more.txt")).unwrap(),
+        b"also"
+    );
+    assert_eq!(
+        std::fs::metadata(out.join("sub/deeper/more.txt"))
+            .unwrap()
+            .ino(),
+        ino
+    );
+    assert_eq!(
+        std::fs::read_link(out.join("sub/link")).unwrap(),
+        Path::new("keep.txt")
+    );
+    assert_eq!(names(d.path()), vec!["out"]);
+}
+
+#[test]
 fn an_old_folder_left_by_a_killed_switch_gives_back_what_is_missing() {
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("out");

@@ -6,10 +6,10 @@
 //!   one, never a truncated mix.
 //! - [`atomic::Report`]: a report of several files (yield, sweep, overlay).
 //!   Every file is staged complete and fsynced in a hidden folder beside
-//!   `--out`, together with hard links of everything else `--out` holds;
-//!   the commit exchanges that folder with `--out` in one
-//!   `renameat2(RENAME_EXCHANGE)`, then moves the user's subfolders across
-//!   and removes the old folder. A reader, a SIGKILL or a power loss sees
+//!   `--out`, together with hard links of everything else `--out` holds
+//!   (the user's subfolders as new folders of hard links of their whole
+//!   tree); the commit exchanges that folder with `--out` in one
+//!   `renameat2(RENAME_EXCHANGE)` and removes the old folder. A reader, a SIGKILL or a power loss sees
 //!   the whole old folder or the whole new one. Where a switch cannot be
 //!   made (`--out` is or holds the current directory, a mount point, an
 //!   unwritable parent, a filesystem without exchange, more than
