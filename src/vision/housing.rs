@@ -3,7 +3,8 @@
 //! pins. The outline anchors the grid when the pins alone cannot, and
 //! bounds where an extra counts ([`rect_distance`]).
 
-use super::gray::Coarse;
+use super::fit::{self, Similarity};
+use super::gray::{Coarse, Plane, Px};
 use super::grid::{self, Lattice};
 
 /// Housing edges in lattice units [a0, a1, b0, b1], from edge profiles
@@ -71,6 +72,150 @@ pub(crate) fn find_housing(
     let b1 = side(false, &a_lines, b_span.1 as f64 + half_pin_b, 1.0, lat.py)?;
     let b0 = side(false, &a_lines, b_span.0 as f64 - half_pin_b, -1.0, lat.py)?;
     Some([a0, a1, b0, b1])
+}
+
+/// The housing's pose in the part frame of a grid fit: its rotation and
+/// centre relative to the fit's, measured at full resolution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct HousingPose {
+    /// Rotation of the housing's sides against the fit's axes, radians.
+    pub dtheta: f64,
+    /// Centre of the outline in the fit's part frame, mm.
+    pub centre_mm: (f64, f64),
+}
+
+impl HousingPose {
+    /// The grid placed on the housing: its centre on the outline's centre,
+    /// its axes along the outline's sides, the scale kept.
+    pub fn frame(&self, sim: &Similarity) -> Similarity {
+        let (tx, ty) = sim.apply(self.centre_mm.0, self.centre_mm.1);
+        Similarity {
+            s: sim.s,
+            theta: sim.theta + self.dtheta,
+            tx,
+            ty,
+        }
+    }
+}
+
+/// The housing's four sides measured at full resolution in the frame of
+/// `sim` (part-frame mm), starting from the coarse outline `rect`
+/// ([u0, u1, v0, v1], mm) of a part whose pins span ±`field` mm. Each side
+/// is profiled across at up to 41 places along its middle (±60 % of its
+/// half length: rounded corners are symmetric and leave the slope and
+/// the centre alone), the strongest step of each profile is placed to a
+/// sub-pixel by a parabola, and a robust line through them gives the
+/// side's direction and place. `None` unless all four sides are found
+/// with most profiles on one straight edge and all four agree on the
+/// rotation. This is a ruler independent of the pins: with two or three
+/// pins the similarity fit bends its rotation, centre and scale to any
+/// one pin's bend, the housing does not.
+pub(crate) fn measure_pose<P: Px>(
+    plane: &Plane<P>,
+    sim: &Similarity,
+    rect: [f64; 4],
+    field: (f64, f64),
+) -> Option<HousingPose> {
+    let s = sim.s;
+    if !(s > 0.0) || !(rect[1] > rect[0]) || !(rect[3] > rect[2]) {
+        return None;
+    }
+    let at = |u: f64, v: f64| {
+        let (x, y) = sim.apply(u, v);
+        if x < 0.0 || y < 0.0 || x > (plane.w - 1) as f64 || y > (plane.h - 1) as f64 {
+            f32::NAN
+        } else {
+            plane.bilinear(x, y)
+        }
+    };
+    let step = 0.5 / s;
+    // side: (normal along u?, direction, edge, along-range lo, hi, field half)
+    let sides = [
+        (true, 1.0, rect[1], rect[2], rect[3], field.0),
+        (true, -1.0, rect[0], rect[2], rect[3], field.0),
+        (false, 1.0, rect[3], rect[0], rect[1], field.1),
+        (false, -1.0, rect[2], rect[0], rect[1], field.1),
+    ];
+    let mut lines = Vec::with_capacity(4);
+    for &(normal_u, dir, e0, lo, hi, half) in &sides {
+        let margin = dir * e0 - half;
+        if !(margin * s > 3.0) {
+            return None;
+        }
+        let (c_o, l_half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+        let w_in = 0.45 * margin;
+        let w_out = (0.45 * margin).max(4.0 / s);
+        let n_prof = ((1.2 * l_half * s / 2.0) as usize).clamp(5, 41);
+        let n_s = ((w_in + w_out) / step) as usize + 1;
+        if n_s < 5 {
+            return None;
+        }
+        let mut pts = Vec::with_capacity(n_prof);
+        for j in 0..n_prof {
+            let t = c_o + 0.6 * l_half * (2.0 * j as f64 / (n_prof - 1) as f64 - 1.0);
+            let prof: Vec<f64> = (0..n_s)
+                .map(|i| {
+                    let q = e0 - dir * w_in + dir * i as f64 * step;
+                    let mut acc = 0.0;
+                    for dt in [-1.0, 0.0, 1.0] {
+                        let tt = t + dt / s;
+                        acc += if normal_u { at(q, tt) } else { at(tt, q) } as f64;
+                    }
+                    acc / 3.0
+                })
+                .collect();
+            if prof.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
+            let g: Vec<f64> = (1..n_s - 1)
+                .map(|i| (prof[i + 1] - prof[i - 1]).abs())
+                .collect();
+            let Some((k, _)) = g.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else {
+                continue;
+            };
+            let mut off = 0.0;
+            if k > 0 && k + 1 < g.len() {
+                let (a, b, c) = (g[k - 1], g[k], g[k + 1]);
+                let den = a - 2.0 * b + c;
+                if den < 0.0 {
+                    off = (0.5 * (a - c) / den).clamp(-0.5, 0.5);
+                }
+            }
+            let q = e0 - dir * w_in + dir * (k as f64 + 1.0 + off) * step;
+            pts.push((t, q));
+        }
+        let fit = fit::robust_line(&pts, 0.75 / s)?;
+        let k_in = fit.inlier.iter().filter(|b| **b).count();
+        if 10 * k_in < 7 * n_prof || fit.rms * s > 0.5 {
+            return None;
+        }
+        let dtheta = if normal_u { -fit.line.b } else { fit.line.b };
+        lines.push((normal_u, fit.line, dtheta, l_half));
+    }
+    let (mut sw, mut sd) = (0.0, 0.0);
+    for &(_, _, d, l) in &lines {
+        sw += l * l;
+        sd += l * l * d;
+    }
+    let dtheta = sd / sw;
+    for &(_, _, d, l) in &lines {
+        // One side's slope may differ from the others by its noise: a
+        // pixel over its measured length.
+        if (d - dtheta).abs() > 0.01_f64.max(1.0 / (1.2 * l * s)) {
+            return None;
+        }
+    }
+    // Centre: the mid-line between each pair of opposite sides, taken at
+    // the other pair's centre (two passes settle the coupling).
+    let (mut cu, mut cv) = (0.5 * (rect[0] + rect[1]), 0.5 * (rect[2] + rect[3]));
+    for _ in 0..2 {
+        cu = 0.5 * (lines[0].1.y_at(cv) + lines[1].1.y_at(cv));
+        cv = 0.5 * (lines[2].1.y_at(cu) + lines[3].1.y_at(cu));
+    }
+    Some(HousingPose {
+        dtheta,
+        centre_mm: (cu, cv),
+    })
 }
 
 /// Distance of (u, v) from the rectangle [u0, u1] × [v0, v1] (0 inside).

@@ -13,7 +13,7 @@ use super::error::VisionError;
 use super::fit::{self, Similarity};
 use super::gray::{Coarse, ImageInfo, Plane, Px};
 use super::grid::{self, LatticeError};
-use super::housing::{find_housing, rect_distance};
+use super::housing::{HousingPose, find_housing, measure_pose, rect_distance};
 use super::measure::{self, BlobMeasure, Roi};
 use super::recipe::Recipe;
 use super::result::*;
@@ -22,6 +22,16 @@ use super::tip_levels::{
     MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of, contrast_ratio, core_contrast, core_sigma,
     local_contrast, snr_of, tip_disc_radius,
 };
+
+/// Up to this many pins the similarity fit cannot tell one pin's bend from
+/// the grid's pose (four parameters, or three with mm_per_px known): the
+/// housing's outline then places the grid ([`measure_pose`]).
+const FEW_PINS: usize = 3;
+
+/// The most the housing's outline may be turned against the pins' fit
+/// and still be the part's: one pin of two bent across their line by 0.3
+/// pitch (the most the assignment accepts) turns their fit by ≈ 0.3 rad.
+const MAX_HOUSING_TURN: f64 = 0.3;
 
 /// Full-resolution measurement of every coarse blob.
 fn measure_candidates<P: Px>(
@@ -285,6 +295,61 @@ pub fn inspect_top<P: Px>(
             msg: "cannot estimate mm_per_px from fewer than two pins".into(),
         });
     }
+    // Two or three pins do not over-determine a similarity: its rotation,
+    // centre (and free scale) follow one pin's bend, which then shows as a
+    // share or not at all. The housing's outline is a second ruler the
+    // pins do not move: when it is measured cleanly, the grid's rotation
+    // and centre are taken from it (the scale from the recipe's mm_per_px
+    // or the pins) and every pin shows its own deviation.
+    let (u_half, v_half) = (
+        (recipe.cols as f64 - 1.0) / 2.0 * px_mm,
+        (recipe.rows as f64 - 1.0) / 2.0 * py_mm,
+    );
+    let housing_rect = |sim: &Similarity| {
+        housing_lat.map(|h| {
+            let corners_lat = [(h[0], h[2]), (h[1], h[2]), (h[1], h[3]), (h[0], h[3])];
+            let corners_px = corners_lat.map(|(a, b)| lat.to_image(a, b));
+            let uv: Vec<(f64, f64)> = corners_px.iter().map(|p| sim.inverse(p.0, p.1)).collect();
+            let extent_mm = [
+                0.5 * (uv[0].0 + uv[3].0),
+                0.5 * (uv[1].0 + uv[2].0),
+                0.5 * (uv[0].1 + uv[1].1),
+                0.5 * (uv[2].1 + uv[3].1),
+            ];
+            (corners_px, extent_mm)
+        })
+    };
+    let pin_pitch_min = if recipe.rows > 1 {
+        px_mm.min(py_mm)
+    } else {
+        px_mm
+    };
+    let housing_frame = |sim: &Similarity, model: &[(f64, f64)], image: &[(f64, f64)]| {
+        if !(2..=FEW_PINS).contains(&model.len()) {
+            return None;
+        }
+        let (_, rect) = housing_rect(sim)?;
+        let pose: HousingPose = measure_pose(plane, sim, rect, (u_half, v_half))?;
+        let (cu, cv) = pose.centre_mm;
+        // The outline must be the part's: turned and shifted no more than
+        // a bend could move the pins' fit, and every pin near its place.
+        if pose.dtheta.abs() > MAX_HOUSING_TURN || cu.hypot(cv) > 0.3 * pin_pitch_min {
+            return None;
+        }
+        let h = pose.frame(sim);
+        let far = model.iter().zip(image).any(|(m, p)| {
+            let q = h.apply(m.0, m.1);
+            (q.0 - p.0).hypot(q.1 - p.1) > 0.35 * pin_pitch_min * h.s
+        });
+        (!far).then_some(h)
+    };
+    if let Some(h) = housing_frame(&sim, &model, &image) {
+        sim = h;
+        warnings.push(format!(
+            "{} pins do not over-determine the grid: its rotation and centre taken from the housing's outline",
+            model.len()
+        ));
+    }
     // Most pins off the recipe's grid: the robust fit's scale grows with
     // them and its RMS becomes a sizeable part of the pitch (real parts on
     // the interop set stay below 0.4 px, < 1 % of the pitch). It is still a
@@ -416,7 +481,7 @@ pub fn inspect_top<P: Px>(
             .collect();
         let tau = recipe.tolerance.position_mm * sim.s;
         if let Some(f) = fit::consensus_similarity(&model, &image, fixed, Some(sim), 0.1, tau) {
-            sim = f.sim;
+            sim = housing_frame(&f.sim, &model, &image).unwrap_or(f.sim);
             inliers = f.inlier.iter().filter(|b| **b).count();
             rms = f.rms_px;
             for (pi, &(r, c)) in positions.iter().enumerate() {
@@ -559,25 +624,10 @@ pub fn inspect_top<P: Px>(
     }
 
     // Housing in the part frame (or the grid's extent as a stand-in).
-    let (u_half, v_half) = (
-        (recipe.cols as f64 - 1.0) / 2.0 * px_mm,
-        (recipe.rows as f64 - 1.0) / 2.0 * py_mm,
-    );
-    let housing = housing_lat.map(|h| {
-        let corners_lat = [(h[0], h[2]), (h[1], h[2]), (h[1], h[3]), (h[0], h[3])];
-        let corners_px = corners_lat.map(|(a, b)| lat.to_image(a, b));
-        let uv: Vec<(f64, f64)> = corners_px.iter().map(|p| sim.inverse(p.0, p.1)).collect();
-        let extent_mm = [
-            0.5 * (uv[0].0 + uv[3].0),
-            0.5 * (uv[1].0 + uv[2].0),
-            0.5 * (uv[0].1 + uv[1].1),
-            0.5 * (uv[2].1 + uv[3].1),
-        ];
-        Housing {
-            corners_px,
-            extent_mm,
-            edge: None,
-        }
+    let housing = housing_rect(&sim).map(|(corners_px, extent_mm)| Housing {
+        corners_px,
+        extent_mm,
+        edge: None,
     });
     let rect = match &housing {
         Some(h) => h.extent_mm,
@@ -769,4 +819,74 @@ pub fn inspect_top<P: Px>(
     Ok(Inspection::judged(
         recipe, info, grid, housing, found, warnings,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::synth::{Rng, Scene};
+    use super::super::{InspectOptions, PinStatus, Recipe, inspect_gray, truth};
+
+    fn recipe(rows: u32, cols: u32, scale_known: bool) -> Recipe {
+        let mm = if scale_known {
+            "mm_per_px = 0.03\n"
+        } else {
+            ""
+        };
+        Recipe::from_toml_str(
+            &format!(
+                "part_number = \"F\"\nview = \"top\"\nrows = {rows}\ncols = {cols}\npitch_mm = [2.54, 2.54]\npin_mm = 0.64\npin_shape = \"square\"\npolarity = \"bright\"\n{mm}[tolerance]\nposition_mm = 0.12\n"
+            ),
+            "t",
+        )
+        .unwrap()
+    }
+
+    /// Statuses found and true, row-major.
+    fn statuses(sc: &Scene) -> (Vec<PinStatus>, Vec<PinStatus>) {
+        let (g, t) = sc.render();
+        let ins = inspect_gray(
+            &sc.recipe,
+            &g,
+            Default::default(),
+            &InspectOptions::default(),
+        )
+        .unwrap();
+        let c = truth::compare(&ins, &t, 15.0);
+        assert!(c.extras_spurious == 0, "{:?}", ins.extras);
+        (
+            ins.pins.iter().map(|p| p.status).collect(),
+            t.pins.iter().map(|p| p.defect).collect(),
+        )
+    }
+
+    /// One pin of two or three bent across the row by 1.6 tolerances: the
+    /// pins' own fit turns and shifts onto it (two pins: it shows nothing),
+    /// the housing's outline does not move, so the bent pin is found and
+    /// the others stay ok; a good part turned, shifted and blurred stays
+    /// ok throughout.
+    #[test]
+    fn a_bent_pin_of_two_or_three_is_placed_by_the_housing() {
+        for (cols, known) in [(2, true), (3, true), (2, false), (3, false)] {
+            let r = recipe(1, cols, known);
+            for (k, dir) in [(0usize, 1.0), (cols as usize - 1, -1.0)] {
+                let mut sc = Scene::nominal(&r, 0.03);
+                sc.rotation_deg = 3.0 * dir;
+                sc.centre_px.0 += 7.3;
+                sc.noise_dn = 3.0;
+                sc.pins[k].offset_mm = (0.0, dir * 1.6 * 0.12);
+                let (found, truth) = statuses(&sc);
+                assert_eq!(truth[k], PinStatus::Bent);
+                assert_eq!(found, truth, "1×{cols} scale known {known}, pin {k}");
+            }
+            for s in 0..6 {
+                let mut sc = Scene::nominal(&r, 0.03);
+                sc.randomise(&mut Rng::new(40 + s), 5.0, 20.0, 1.5);
+                sc.noise_dn = 4.0;
+                sc.seed = 90 + s;
+                let (found, truth) = statuses(&sc);
+                assert!(truth.iter().all(|t| *t == PinStatus::Ok));
+                assert_eq!(found, truth, "good 1×{cols} scale known {known}, seed {s}");
+            }
+        }
+    }
 }
