@@ -94,23 +94,45 @@ pub fn inspect_top<P: Px>(
         }
     };
     let s0 = pin_px0 / recipe.pin_mm;
-    let cs = detect::coarse_search(plane, sign, pin_px0, None, Some(recipe.positions().len()));
+    let n_pos = Some(recipe.positions().len());
+    let mut cs = detect::coarse_search(plane, sign, pin_px0, None, n_pos);
     detect::check_contrast(&cs.coarse, full_scale)?;
-    let blobs = measure_candidates(plane, sign, &cs, pin_px0, opts);
     let tip_px0 = recipe.tip_area_mm2() * s0 * s0;
-    let mut cands: Vec<Candidate> = blobs
-        .into_iter()
-        .map(|(m, roi, seed)| {
-            let a = m.area_px / tip_px0;
-            let pinlike = (0.3..3.0).contains(&a) && m.elongation < 3.0 && !m.touches_border;
-            Candidate {
-                m,
-                pinlike,
-                roi,
-                seed,
-            }
-        })
-        .collect();
+    let candidates = |cs: &CoarseSearch| -> Vec<Candidate> {
+        measure_candidates(plane, sign, cs, pin_px0, opts)
+            .into_iter()
+            .map(|(m, roi, seed)| {
+                let a = m.area_px / tip_px0;
+                let pinlike = (0.3..3.0).contains(&a) && m.elongation < 3.0 && !m.touches_border;
+                Candidate {
+                    m,
+                    pinlike,
+                    roi,
+                    seed,
+                }
+            })
+            .collect()
+    };
+    let mut cands = candidates(&cs);
+    // No tip at all: small faint tips under heavy noise peak below the
+    // coarse search's noise floor with its usual smoothing box; a second
+    // pass with the wider one (`Smoothing::Faint`) finds them. Images
+    // whose tips the first pass finds are unchanged.
+    if !cands.iter().any(|c| c.pinlike) {
+        let cs2 = detect::coarse_search_smoothed(
+            plane,
+            sign,
+            pin_px0,
+            None,
+            n_pos,
+            detect::Smoothing::Faint,
+        );
+        let cands2 = candidates(&cs2);
+        if cands2.iter().any(|c| c.pinlike) {
+            cs = cs2;
+            cands = cands2;
+        }
+    }
     let pin_pts: Vec<(f64, f64)> = cands
         .iter()
         .filter(|c| c.pinlike)
