@@ -92,3 +92,157 @@ pub(crate) fn normalise_backlight(c: &mut Coarse) {
         }
     }
 }
+
+/// Share of the way from the backlight to the silhouette's level above
+/// which a coarse pixel is surely silhouette (housing, a pin's core): the
+/// backlight's patches that the cubic surface leaves (a sharp gradient
+/// band, a mottled diffuser) stay below it.
+const SURE_SILHOUETTE: f32 = 0.75;
+
+/// Flattens what the cubic backlight leaves in a normalised back-lit
+/// coarse image (`normalise_backlight`): the local backlight is the mean of
+/// the pixels that are not surely silhouette (above [`SURE_SILHOUETTE`] of
+/// `level`, dilated by `dilate` coarse px) within about `radius` coarse px
+/// (two box passes), and is moved to −1000. Pixels with too little
+/// backlight about them (inside a large housing block) are left alone.
+///
+/// A cubic surface cannot follow a gradient band a few tens of pixels wide
+/// (800 835: the band's dim side passed the threshold, joined the housing
+/// and its edge was found tilted 33°) nor a mottled backlight whose patches
+/// are as dark as half a silhouette (py 550 296: the pins merged with dark
+/// patches above them and were measured 3–6 mm high or lost).
+pub(crate) fn flatten_residual(c: &mut Coarse, level: f32, radius: usize, dilate: usize) {
+    let (w, h) = (c.w, c.h);
+    if w < 8 || h < 8 || !(level > -1000.0) || radius == 0 {
+        return;
+    }
+    let sure_t = -1000.0 + SURE_SILHOUETTE * (level + 1000.0);
+    // Sure silhouette, dilated (separable max over ± dilate).
+    let sure: Vec<bool> = c.data.iter().map(|&v| v > sure_t).collect();
+    let mut rowd = vec![false; w * h];
+    for y in 0..h {
+        let row = &sure[y * w..(y + 1) * w];
+        let mut last: Option<usize> = None; // last sure x seen
+        // forward pass: distance to the last sure pixel on the left
+        for x in 0..w {
+            if row[x] {
+                last = Some(x);
+            }
+            if last.is_some_and(|l| x - l <= dilate) {
+                rowd[y * w + x] = true;
+            }
+        }
+        let mut next: Option<usize> = None;
+        for x in (0..w).rev() {
+            if row[x] {
+                next = Some(x);
+            }
+            if next.is_some_and(|nx| nx - x <= dilate) {
+                rowd[y * w + x] = true;
+            }
+        }
+    }
+    let mut excl = vec![false; w * h];
+    for x in 0..w {
+        let mut last: Option<usize> = None;
+        for y in 0..h {
+            if rowd[y * w + x] {
+                last = Some(y);
+            }
+            if last.is_some_and(|l| y - l <= dilate) {
+                excl[y * w + x] = true;
+            }
+        }
+        let mut next: Option<usize> = None;
+        for y in (0..h).rev() {
+            if rowd[y * w + x] {
+                next = Some(y);
+            }
+            if next.is_some_and(|ny| ny - y <= dilate) {
+                excl[y * w + x] = true;
+            }
+        }
+    }
+    let mut num: Vec<f32> = c
+        .data
+        .iter()
+        .zip(&excl)
+        .map(|(&v, &e)| if e { 0.0 } else { v + 1000.0 })
+        .collect();
+    let mut den: Vec<f32> = excl.iter().map(|&e| if e { 0.0 } else { 1.0 }).collect();
+    for _ in 0..2 {
+        box_blur(&mut num, w, h, radius);
+        box_blur(&mut den, w, h, radius);
+    }
+    for i in 0..w * h {
+        if den[i] > 0.05 {
+            c.data[i] -= num[i] / den[i];
+        }
+    }
+}
+
+/// Mean over (2r+1)² (clamped at the borders: the mean of what lies
+/// inside), separable, by running sums.
+fn box_blur(d: &mut [f32], w: usize, h: usize, r: usize) {
+    let mut tmp = vec![0f32; w.max(h)];
+    let mut pass = |get: &dyn Fn(usize) -> usize, n: usize, d: &mut [f32]| {
+        let mut s = 0f64;
+        let (mut lo, mut hi) = (0usize, 0usize); // window [lo, hi)
+        for i in 0..n {
+            let want_hi = (i + r + 1).min(n);
+            let want_lo = i.saturating_sub(r);
+            while hi < want_hi {
+                s += d[get(hi)] as f64;
+                hi += 1;
+            }
+            while lo < want_lo {
+                s -= d[get(lo)] as f64;
+                lo += 1;
+            }
+            tmp[i] = (s / (hi - lo) as f64) as f32;
+        }
+        for i in 0..n {
+            d[get(i)] = tmp[i];
+        }
+    };
+    for y in 0..h {
+        pass(&|i| y * w + i, w, d);
+    }
+    for x in 0..w {
+        pass(&|i| i * w + x, h, d);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dark_patch_of_backlight_is_flattened_and_the_silhouette_kept() {
+        // Normalised sign space, 120 × 80: backlight at -1000 with a dark
+        // patch (Gaussian, σ 6 px, +300 at (30, 20): beyond the half-level
+        // threshold -750 of a silhouette at -500); a housing block (rows
+        // 50..80) and a pin 4 px wide (columns 80..84, rows 30..50) at -500.
+        let (w, h) = (120usize, 80usize);
+        let solid = |x: usize, y: usize| y >= 50 || ((80..84).contains(&x) && y >= 30);
+        let mut data = vec![0f32; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f32 - 30.0, y as f32 - 20.0);
+                let patch = 300.0 * (-(dx * dx + dy * dy) / 72.0).exp();
+                data[y * w + x] = if solid(x, y) { -500.0 } else { -1000.0 + patch };
+            }
+        }
+        assert!(data[20 * w + 30] > -750.0);
+        let mut c = Coarse { w, h, k: 1, data };
+        flatten_residual(&mut c, -500.0, 8, 1);
+        for y in 0..h {
+            for x in 0..w {
+                let v = c.data[y * w + x];
+                assert_eq!(v > -750.0, solid(x, y), "({x}, {y}) {v}");
+            }
+        }
+        // The pin's level is kept within a few per cent of the contrast.
+        assert!((c.data[40 * w + 81] + 500.0).abs() < 25.0);
+    }
+}

@@ -26,7 +26,8 @@ use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
 use super::result::*;
 use super::side_edge::{
-    body_x_range, drop_steep_tops, edge_profile, run_tops, silhouette_threshold,
+    BarMask, body_x_range, drop_steep_tops, edge_profile, run_tops, silhouette_level,
+    silhouette_threshold,
 };
 use super::side_row::{
     bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
@@ -78,12 +79,19 @@ pub fn inspect_side<P: Px>(
         backlight::normalise_backlight(&mut coarse);
     }
     let (cw, ch) = (coarse.w, coarse.h);
-    let t = detect::otsu(&coarse.data, cw, ch);
-    let t = if sign < 0.0 {
-        silhouette_threshold(&coarse.data, t)
-    } else {
-        t
-    };
+    let mut t = detect::otsu(&coarse.data, cw, ch);
+    if sign < 0.0 {
+        // What the cubic backlight leaves, flattened over about 36 px
+        // (bands and patches wider than that), the silhouette's level
+        // taken first; then the threshold again on the flattened image.
+        if let Some(level) = silhouette_level(&coarse.data, t) {
+            let radius = (36 / k).max(2);
+            let dilate = 6usize.div_ceil(k).max(1);
+            backlight::flatten_residual(&mut coarse, level, radius, dilate);
+            t = detect::otsu(&coarse.data, cw, ch);
+        }
+        t = silhouette_threshold(&coarse.data, t);
+    }
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
     // 1. Housing edge, coarse: top of the longest silhouette run per column.
@@ -603,6 +611,10 @@ pub fn inspect_side<P: Px>(
         }
     }
     let (margin, dilate) = super::measure::tip_window(pin_px_prior);
+    // The bars' coarse pixels: a dust blob whose measured shadow lies on
+    // (or against) one is that bar, not dust.
+    let on_bar = BarMask::new(cw, ch, &bar_blobs, &lab.runs);
+    let reach = ((0.25 * pin_px_prior).max(2.0) / kf).ceil() as usize;
     for d in &dust_blobs {
         let roi = Roi::around(
             d.x_min as f64 * kf,
@@ -619,6 +631,17 @@ pub fn inspect_side<P: Px>(
         else {
             continue;
         };
+        // At full resolution (coarse factor 1 for thin pins) noise pixels
+        // beside a pin pass the threshold on their own; the window around
+        // one takes in the pin, and its measure was a piece of that pin
+        // (py 550 034: fifteen "dust" shadows along six pins, noise 14 DN
+        // on a 100 DN silhouette). Dust lies clear of the pins.
+        // Likewise a speck just above the housing's edge measures the
+        // housing (py 550 034).
+        let on_edge = m.y >= line.y_at(m.x) - (0.25 * pin_px_prior).max(2.0);
+        if on_bar.near(m.x / kf, m.y / kf, reach) || on_edge {
+            continue;
+        }
         let ar = m.area_px / tip_px;
         // Dust is opaque: its shadow stands most of the way from the
         // backlight to the housing's level, and clear of the noise. A

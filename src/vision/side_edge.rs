@@ -30,8 +30,17 @@ const DARK_QUANTILE: f64 = 0.99;
 /// noise: 400 202). Where nothing beyond Otsu's threshold lies twice as
 /// far from the backlight, Otsu stands.
 pub(super) fn silhouette_threshold(data: &[f32], otsu: f32) -> f32 {
+    match silhouette_level(data, otsu) {
+        Some(level) => otsu.max(0.5 * (BACKLIGHT + level)),
+        None => otsu,
+    }
+}
+
+/// The silhouette's level (see [`silhouette_threshold`]); `None` when
+/// nothing lies beyond the first threshold.
+pub(super) fn silhouette_level(data: &[f32], otsu: f32) -> Option<f32> {
     if data.is_empty() {
-        return otsu;
+        return None;
     }
     let mut v = data.to_vec();
     let q = ((v.len() - 1) as f64 * DARK_QUANTILE) as usize;
@@ -39,11 +48,10 @@ pub(super) fn silhouette_threshold(data: &[f32], otsu: f32) -> f32 {
     let first = otsu.max(0.5 * (BACKLIGHT + dark));
     let mut beyond: Vec<f32> = data.iter().copied().filter(|&x| x > first).collect();
     if beyond.is_empty() {
-        return otsu;
+        return None;
     }
     let m = beyond.len() / 2;
-    let level = *beyond.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1;
-    otsu.max(0.5 * (BACKLIGHT + level))
+    Some(*beyond.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1)
 }
 
 /// Each column's longest silhouette run of at least `min_run` coarse px,
@@ -185,6 +193,56 @@ pub(super) fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The coarse pixels of the bars (pins) standing on the housing.
+pub(super) struct BarMask {
+    w: usize,
+    h: usize,
+    on: Vec<bool>,
+}
+
+impl BarMask {
+    pub(super) fn new(w: usize, h: usize, bars: &[Blob], runs: &[Run]) -> BarMask {
+        let mut on = vec![false; w * h];
+        for b in bars {
+            for &i in &b.runs {
+                let r = runs[i as usize];
+                for x in r.x0..r.x1.min(w as u32) {
+                    if (r.y as usize) < h {
+                        on[r.y as usize * w + x as usize] = true;
+                    }
+                }
+            }
+        }
+        BarMask { w, h, on }
+    }
+
+    /// Whether a bar pixel lies within `reach` coarse px (Chebyshev) of
+    /// the coarse point (x, y).
+    ///
+    /// At full resolution (coarse factor 1, thin pins) a few noise pixels
+    /// beside a pin pass the threshold on their own; the window a dust
+    /// candidate is measured in then takes in the pin, and what it
+    /// measured was a piece of that pin (py 550 034: fifteen "dust"
+    /// shadows along six pins, noise 14 DN on a 100 DN silhouette). Dust
+    /// lies clear of the pins, so a measure that lands on a bar is the bar.
+    pub(super) fn near(&self, x: f64, y: f64, reach: usize) -> bool {
+        if !(x.is_finite() && y.is_finite()) {
+            return false;
+        }
+        let (cx, cy) = (x.floor() as i64, y.floor() as i64);
+        let r = reach as i64;
+        (cy - r..=cy + r).any(|yy| {
+            (cx - r..=cx + r).any(|xx| {
+                xx >= 0
+                    && yy >= 0
+                    && (xx as usize) < self.w
+                    && (yy as usize) < self.h
+                    && self.on[yy as usize * self.w + xx as usize]
+            })
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -262,6 +320,35 @@ mod tests {
         // Backlight alone (no silhouette): Otsu's threshold stands.
         let d: Vec<f32> = (0..1000).map(|i| -1000.0 + (i % 100) as f32).collect();
         assert_eq!(silhouette_threshold(&d, -950.0), -950.0);
+    }
+
+    #[test]
+    fn a_measure_on_a_pin_is_the_pin_and_dust_clear_of_it_is_dust() {
+        // A 40 x 25 coarse mask above the housing edge: a pin (columns
+        // 10-13, rows 5-24); a noise speck 2 px right of the pin (column
+        // 16, rows 12-13); dust clear of the pin (columns 20-23, rows 8-11).
+        let fg = |x: usize, y: usize| {
+            ((10..14).contains(&x) && (5..25).contains(&y))
+                || (x == 16 && (12..14).contains(&y))
+                || ((20..24).contains(&x) && (8..12).contains(&y))
+        };
+        let lab = crate::vision::label::label(40, 25, fg);
+        assert_eq!(lab.blobs.len(), 3);
+        let pin: Vec<Blob> = lab
+            .blobs
+            .iter()
+            .filter(|b| b.height() == 20)
+            .cloned()
+            .collect();
+        let mask = BarMask::new(40, 25, &pin, &lab.runs);
+        // The speck's window took in the pin: its measure lands on the
+        // pin's edge (x 13.6) or beside it (x 15.2, the speck's column).
+        assert!(mask.near(13.6, 12.5, 1));
+        assert!(mask.near(15.2, 12.5, 2));
+        // The dust's own measure, 9.5 px from the pin's centre, is dust.
+        assert!(!mask.near(21.5, 9.5, 2));
+        // Above the pin's tip by more than the reach: not the pin.
+        assert!(!mask.near(11.5, 1.5, 2));
     }
 
     #[test]
