@@ -57,6 +57,7 @@ pub mod synth;
 pub mod synth_envelope;
 pub mod tip_levels;
 pub mod top;
+mod top_extras;
 pub mod truth;
 pub mod yield_acc;
 

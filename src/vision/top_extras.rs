@@ -1,0 +1,203 @@
+//! Top view: the blobs no pin position took, judged one by one as extras
+//! (debris) or set aside with the reason (a housing edge, a ripple of a
+//! brighter structure, texture, noise lifting a fainter structure, too far
+//! from the housing). Split from `top.rs`: the judging reads every blob
+//! against the local tip levels the pins established there.
+
+use super::fit::Similarity;
+use super::gray::{Plane, Px};
+use super::housing::rect_distance;
+use super::measure::{self, Localiser};
+use super::recipe::ExtrasRule;
+use super::result::ExtraResult;
+use super::tip_levels::{
+    CORE_SIGMAS, Candidate, LocalLevels, MIN_LOCAL_CONTRAST, MIN_PROMINENCE, MIN_SNR,
+    MIN_TIP_CONTRAST, contrast_ratio, core_contrast, core_sigma, local_contrast, snr_of,
+};
+
+/// Where the top view stands when it judges the blobs left over.
+pub(super) struct Leftovers<'a, P: Px> {
+    pub plane: &'a Plane<'a, P>,
+    pub sign: f32,
+    pub localiser: Localiser,
+    pub dilate: usize,
+    /// Every measured blob, and which of them a pin position took.
+    pub cands: &'a [Candidate],
+    pub used: &'a [bool],
+    /// A tip's area in pixels at the fitted scale.
+    pub tip_px: f64,
+    pub levels: &'a LocalLevels,
+    pub sim: &'a Similarity,
+    /// The housing (or the grid grown by half a pitch) in the part frame, mm.
+    pub rect: [f64; 4],
+    pub pitch_mm: f64,
+}
+
+/// The blobs no pin took: (extras counted, blobs set aside with why).
+pub(super) fn judge_extras<P: Px>(
+    lo: &Leftovers<'_, P>,
+    rule: &ExtrasRule,
+) -> (Vec<ExtraResult>, Vec<ExtraResult>) {
+    let Leftovers {
+        plane,
+        sign,
+        localiser,
+        dilate,
+        cands,
+        used: cand_used,
+        tip_px,
+        levels,
+        sim,
+        rect,
+        pitch_mm: px_mm,
+    } = *lo;
+    let mut extras = Vec::new();
+    let mut ignored = Vec::new();
+    let max_dist = rule.max_distance_pitch * px_mm;
+    for (ci, c) in cands.iter().enumerate() {
+        if cand_used[ci] {
+            continue;
+        }
+        let ar0 = c.m.area_px / tip_px;
+        if ar0 < 0.5 * rule.min_area_ratio {
+            continue;
+        }
+        // The blob against what a tip looks like here: its area counted in
+        // tip-bright units (a faint stain weighs little), its level as a
+        // fraction of the local tip level, its contrast against the local
+        // noise floor.
+        // A blob whose half-level mask runs past its window (debris on the
+        // housing's edge, joined at half level to a brighter fixture) is
+        // cut from that structure where it separates and measured above
+        // the saddle (`measure_blob_split`); what never separates stays a
+        // housing edge or frame.
+        let apart = c.m.touches_border;
+        let remeasure = |floor: Option<f32>| {
+            measure::measure_blob_split(plane, sign, c.roi, c.seed, localiser, dilate, floor, apart)
+        };
+        let expected = levels.expected(c.m.x, c.m.y);
+        let (m, rho) = match expected {
+            Some((t, b)) => {
+                let m = remeasure(Some(t)).unwrap_or_else(|| c.m.clone());
+                let hi = if apart { m.hi } else { c.m.hi };
+                (m, Some(contrast_ratio(hi, t, b)))
+            }
+            None if apart => (remeasure(None).unwrap_or_else(|| c.m.clone()), None),
+            None => (c.m.clone(), None),
+        };
+        let cut = apart && !m.touches_border;
+        // How far a cut blob stands above the saddle where it joins the
+        // structure, as a fraction of the local tip contrast: a ripple of a
+        // housing rim or a shading corner stands a few hundredths, debris a
+        // sizeable part of it.
+        let prominence = match expected {
+            Some((t, b)) if cut => contrast_ratio(m.hi, t, b) - contrast_ratio(m.lo, t, b),
+            _ => 1.0,
+        };
+        let ar = m.area_px / tip_px;
+        let snr = if apart { snr_of(&m) } else { snr_of(&c.m) };
+        let (u, v) = sim.inverse(m.x, m.y);
+        let dist = rect_distance(u, v, rect);
+        let mut e = ExtraResult {
+            x_px: m.x,
+            y_px: m.y,
+            area_ratio: ar,
+            distance_mm: Some(dist),
+            ignored_because: None,
+            contrast_ratio: rho,
+            snr: Some(snr),
+            reason: None,
+        };
+        let rho_v = rho.unwrap_or(1.0);
+        // The level of its core, not selected by the noise: the mean over
+        // a disc of the smallest area the rule counts, at its centre.
+        let core_px = rule.min_area_ratio * tip_px;
+        let core =
+            expected.and_then(|(t, b)| core_contrast(plane, sign, (m.x, m.y), core_px, t, b));
+        let core_v = core.unwrap_or(1.0);
+        // The core's own noise, and how far the blob stands above its own
+        // surround (both as fractions of the local tip contrast).
+        let meas = if apart { &m } else { &c.m };
+        let (core_sd, local) = match expected {
+            Some((t, b)) => (
+                core_sigma(meas.noise, core_px, t, b),
+                local_contrast(meas, t, b),
+            ),
+            None => (0.0, 1.0),
+        };
+        if ar < rule.min_area_ratio {
+            if ar >= 0.5 * rule.min_area_ratio {
+                e.ignored_because = Some(format!(
+                    "area {ar:.2} of a tip (in tip-bright units), below {}",
+                    rule.min_area_ratio
+                ));
+                ignored.push(e);
+            }
+        } else if m.touches_border {
+            if ar0 >= rule.min_area_ratio {
+                e.ignored_because = Some(
+                    "part of a larger structure (it runs past its measuring window): a housing edge or frame, not a separate blob".into(),
+                );
+                ignored.push(e);
+            }
+        } else if prominence < MIN_PROMINENCE {
+            e.ignored_because = Some(format!(
+                "joined to a larger bright structure, standing {prominence:.2} of the local tip contrast above their saddle (below {MIN_PROMINENCE}): a ripple of that structure"
+            ));
+            ignored.push(e);
+        } else if rho_v < MIN_TIP_CONTRAST {
+            if ar0 >= rule.min_area_ratio {
+                e.ignored_because = Some(format!(
+                    "its level reaches {rho_v:.2} of the local tip level, below {MIN_TIP_CONTRAST}: housing or fixture structure, not a tip-bright blob"
+                ));
+                ignored.push(e);
+            }
+        } else if !cut && local < MIN_LOCAL_CONTRAST {
+            e.ignored_because = Some(format!(
+                "it stands {local:.2} of the local tip contrast above its own surround, below {MIN_LOCAL_CONTRAST}: a bump of a structure as bright as the tips (a bright fixture's texture), not a separate blob"
+            ));
+            ignored.push(e);
+        } else if core_v < MIN_TIP_CONTRAST {
+            e.ignored_because = Some(format!(
+                "its core (the mean over {} of a tip's area at its centre) reaches {core_v:.2} of the local tip level, below {MIN_TIP_CONTRAST}: its mask's level {rho_v:.2} was noise lifting a fainter structure (a housing rim, shading)",
+                rule.min_area_ratio
+            ));
+            ignored.push(e);
+        } else if core_v - CORE_SIGMAS * core_sd < MIN_TIP_CONTRAST {
+            e.ignored_because = Some(format!(
+                "its core reaches {core_v:.2} ± {core_sd:.2} (noise σ) of the local tip level, not {CORE_SIGMAS} σ above {MIN_TIP_CONTRAST}: noise clumps on a fainter structure (a housing rim, shading) can read that high"
+            ));
+            ignored.push(e);
+        } else if snr < MIN_SNR {
+            e.ignored_because = Some(format!(
+                "{snr:.1} σ above the local noise floor, below {MIN_SNR}"
+            ));
+            ignored.push(e);
+        } else if dist > max_dist {
+            e.ignored_because = Some(format!(
+                "{dist:.2} mm from the housing, beyond {} pitch",
+                rule.max_distance_pitch
+            ));
+            ignored.push(e);
+        } else {
+            e.reason = Some(format!(
+                "area {ar:.2} of a tip ≥ {}, level {} of the local tip level, {} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2})",
+                rule.min_area_ratio,
+                rho.map_or("n/a".to_string(), |r| format!("{r:.2}")),
+                // A noise-free floor (a clean rendering) has no finite SNR.
+                if snr.is_finite() {
+                    format!("{snr:.0}")
+                } else {
+                    "∞".to_string()
+                },
+            ));
+            if cut && let Some(r) = e.reason.as_mut() {
+                r.push_str(
+                    "; cut from the brighter structure it touches, measured above their saddle",
+                );
+            }
+            extras.push(e);
+        }
+    }
+    (extras, ignored)
+}
