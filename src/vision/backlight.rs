@@ -117,52 +117,16 @@ pub(crate) fn flatten_residual(c: &mut Coarse, level: f32, radius: usize, dilate
         return;
     }
     let sure_t = -1000.0 + SURE_SILHOUETTE * (level + 1000.0);
-    // Sure silhouette, dilated (separable max over ± dilate).
-    let sure: Vec<bool> = c.data.iter().map(|&v| v > sure_t).collect();
-    let mut rowd = vec![false; w * h];
-    for y in 0..h {
-        let row = &sure[y * w..(y + 1) * w];
-        let mut last: Option<usize> = None; // last sure x seen
-        // forward pass: distance to the last sure pixel on the left
-        for x in 0..w {
-            if row[x] {
-                last = Some(x);
-            }
-            if last.is_some_and(|l| x - l <= dilate) {
-                rowd[y * w + x] = true;
-            }
-        }
-        let mut next: Option<usize> = None;
-        for x in (0..w).rev() {
-            if row[x] {
-                next = Some(x);
-            }
-            if next.is_some_and(|nx| nx - x <= dilate) {
-                rowd[y * w + x] = true;
-            }
-        }
-    }
-    let mut excl = vec![false; w * h];
-    for x in 0..w {
-        let mut last: Option<usize> = None;
-        for y in 0..h {
-            if rowd[y * w + x] {
-                last = Some(y);
-            }
-            if last.is_some_and(|l| y - l <= dilate) {
-                excl[y * w + x] = true;
-            }
-        }
-        let mut next: Option<usize> = None;
-        for y in (0..h).rev() {
-            if rowd[y * w + x] {
-                next = Some(y);
-            }
-            if next.is_some_and(|ny| ny - y <= dilate) {
-                excl[y * w + x] = true;
-            }
-        }
-    }
+    // Sure silhouette, dilated by a (2 dilate + 1)² square.
+    let sure: Vec<f32> = c
+        .data
+        .iter()
+        .map(|&v| if v > sure_t { 1.0 } else { 0.0 })
+        .collect();
+    let excl: Vec<bool> = super::morph::dilate_square(&sure, w, h, dilate)
+        .into_iter()
+        .map(|v| v > 0.5)
+        .collect();
     let mut num: Vec<f32> = c
         .data
         .iter()
@@ -171,45 +135,13 @@ pub(crate) fn flatten_residual(c: &mut Coarse, level: f32, radius: usize, dilate
         .collect();
     let mut den: Vec<f32> = excl.iter().map(|&e| if e { 0.0 } else { 1.0 }).collect();
     for _ in 0..2 {
-        box_blur(&mut num, w, h, radius);
-        box_blur(&mut den, w, h, radius);
+        num = super::morph::box_mean(&num, w, h, radius);
+        den = super::morph::box_mean(&den, w, h, radius);
     }
     for i in 0..w * h {
         if den[i] > 0.05 {
             c.data[i] -= num[i] / den[i];
         }
-    }
-}
-
-/// Mean over (2r+1)² (clamped at the borders: the mean of what lies
-/// inside), separable, by running sums.
-fn box_blur(d: &mut [f32], w: usize, h: usize, r: usize) {
-    let mut tmp = vec![0f32; w.max(h)];
-    let mut pass = |get: &dyn Fn(usize) -> usize, n: usize, d: &mut [f32]| {
-        let mut s = 0f64;
-        let (mut lo, mut hi) = (0usize, 0usize); // window [lo, hi)
-        for i in 0..n {
-            let want_hi = (i + r + 1).min(n);
-            let want_lo = i.saturating_sub(r);
-            while hi < want_hi {
-                s += d[get(hi)] as f64;
-                hi += 1;
-            }
-            while lo < want_lo {
-                s -= d[get(lo)] as f64;
-                lo += 1;
-            }
-            tmp[i] = (s / (hi - lo) as f64) as f32;
-        }
-        for i in 0..n {
-            d[get(i)] = tmp[i];
-        }
-    };
-    for y in 0..h {
-        pass(&|i| y * w + i, w, d);
-    }
-    for x in 0..w {
-        pass(&|i| i * w + x, h, d);
     }
 }
 

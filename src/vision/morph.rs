@@ -136,6 +136,16 @@ pub fn open_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
     b
 }
 
+/// Grey dilation (running maximum) with a (2 r + 1)² square, positions
+/// beyond the edges ignored.
+pub fn dilate_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
+    let mut a = data.to_vec();
+    pass_vertical::<true>(&mut a, w, h, r);
+    let mut t = transpose(&a, w, h);
+    pass_vertical::<true>(&mut t, h, w, r);
+    transpose(&t, h, w)
+}
+
 /// Mean over a (2 m + 1)² square (edges: the mean of the part inside),
 /// separable running sums, O(1) per pixel.
 pub fn box_mean(data: &[f32], w: usize, h: usize, m: usize) -> Vec<f32> {
@@ -207,6 +217,27 @@ pub fn white_top_hat(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn dilate_square_spreads_a_point_over_its_square_and_stops_at_the_edges() {
+        let (w, h) = (7usize, 5usize);
+        let mut d = vec![0f32; w * h];
+        d[2 * w + 3] = 1.0;
+        d[0] = 2.0;
+        let out = dilate_square(&d, w, h, 1);
+        for y in 0..h {
+            for x in 0..w {
+                let want = if x <= 1 && y <= 1 {
+                    2.0
+                } else if (2..=4).contains(&x) && (1..=3).contains(&y) {
+                    1.0
+                } else {
+                    0.0
+                };
+                assert_eq!(out[y * w + x], want, "({x}, {y})");
+            }
+        }
+    }
 
     #[test]
     fn box_mean_matches_a_direct_sum_and_background_ignores_holes() {
