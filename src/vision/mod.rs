@@ -51,6 +51,7 @@ pub mod report;
 pub mod result;
 pub mod scale;
 pub mod side;
+mod side_bar;
 mod side_edge;
 mod side_row;
 pub mod synth;

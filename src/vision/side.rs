@@ -25,13 +25,13 @@ use super::label;
 use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
 use super::result::*;
+use super::side_bar::{BarEnd, BarWindow, RowRef, look_again, measure_bar};
 use super::side_edge::{
     BarMask, body_x_range, drop_steep_tops, edge_profile, run_tops, silhouette_level,
     silhouette_threshold,
 };
 use super::side_row::{
-    bar_edges, first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
-    tip_crossing_recentred,
+    first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
 };
 use super::tip_levels;
 
@@ -169,8 +169,22 @@ pub fn inspect_side<P: Px>(
             grid::median(&mut w).unwrap_or(8.0).max(3.0)
         }
     };
+    // Nor is a bar a speck: at full resolution (k = 1 for pins about 7 px
+    // wide) single noise pixels just above the edge stood on it and were
+    // "tall", and as bars they cut the room beside their neighbours
+    // (below) short, so those pins were lost (820 515: four ok pins
+    // missing). A pin's silhouette is about a pin wide at the half level.
+    // And a pin's end lies inside the frame: silhouette reaching the
+    // frame's top border (backlight along a border the flattening took for
+    // silhouette, 820 466) is no pin; it is judged as dust on the untouched
+    // image.
+    let pin_like =
+        |b: &label::Blob| b.y_min > 0 && b.width() as f64 >= 0.5 * pin_px_prior / k as f64;
     for b in &lab.blobs {
-        if touches_edge(b) && tall(b, (b.width() as f64).min(pin_px_prior / k as f64)) {
+        if touches_edge(b)
+            && pin_like(b)
+            && tall(b, (b.width() as f64).min(pin_px_prior / k as f64))
+        {
             bar_blobs.push(b.clone());
         } else {
             dust_blobs.push(b.clone());
@@ -242,98 +256,37 @@ pub fn inspect_side<P: Px>(
                 gap_r = gap_r.min(0.5 * (o0 + x1f));
             }
         }
-        let xa = (x0f - margin).max(gap_l).max(0.0) as usize;
-        let xb = ((x1f + margin).min(gap_r) as usize).min(plane.w - 1);
-        let tip_guess = b.y_min as f64 * kf;
-        let xm = 0.5 * (x0f + x1f);
-        let base = line.y_at(xm);
-        let len = base - tip_guess;
-        if len < 4.0 || xb <= xa + 4 {
-            continue;
-        }
-        // Centre across the bar over its middle part, from row profiles
-        // averaged along the expected axis (perpendicular to the housing
-        // edge): one row's edges are lost in the noise of a dim backlight
-        // (a noise spike passes for the edge), the mean of many rows is
-        // not. The two halves' centres tell a lean (a pin bent sideways).
-        let ya = (tip_guess + 0.3 * len).round() as usize;
-        let yb = (base - 0.15 * len).round().max(ya as f64 + 1.0) as usize;
-        let yb = yb.min(plane.h);
-        if yb < ya + 3 {
-            continue;
-        }
-        let ym = 0.5 * (ya + yb - 1) as f64;
-        let shear = -line.b;
-        let mean_prof = |y0: usize, y1: usize| -> Vec<f32> {
-            let n = (y1 - y0).max(1) as f32;
-            (xa..=xb)
-                .map(|x| {
-                    (y0..y1)
-                        .map(|y| {
-                            let xf = (x as f64 + shear * (y as f64 - ym))
-                                .clamp(0.0, (plane.w - 1) as f64);
-                            sign * plane.bilinear(xf, y as f64)
-                        })
-                        .sum::<f32>()
-                        / n
-                })
-                .collect()
+        let win = BarWindow {
+            x0: x0f,
+            x1: x1f,
+            tip_guess: b.y_min as f64 * kf,
+            gap: (gap_l, gap_r),
+            margin,
+            tip_half: 2.0 * kf + 4.0,
         };
-        let ymid = (ya + yb) / 2;
-        let (Some((l, r)), Some((l1, r1)), Some((l2, r2))) = (
-            bar_edges(&mean_prof(ya, yb)),
-            bar_edges(&mean_prof(ya, ymid)),
-            bar_edges(&mean_prof(ymid, yb)),
-        ) else {
-            continue;
-        };
-        let mx = xa as f64 + 0.5 * (l + r);
-        // Centres of the halves, at their mean rows, relative to the
-        // perpendicular through the whole bar's centre.
-        let lean = (0.5 * (l2 + r2) - 0.5 * (l1 + r1)) / (0.5 * (yb - ya) as f64);
-        let perp = fit::Line {
-            a: mx + line.b * ym,
-            b: -line.b,
-        };
-        let axis = if lean.abs() * (yb - ya) as f64 > 1.5 {
-            fit::Line {
-                a: mx - (perp.b + lean) * ym,
-                b: perp.b + lean,
-            }
-        } else {
-            perp
-        };
-        let width_px = r - l;
-        // Tip: the apex of the half-level contour, corrected for the blur's
-        // pull on a rounded end (`side_row::tip_crossing`, the row's median
-        // shape and blur below).
-        // The window is re-centred on the first crossing and widened by the
-        // blur (`side_row::tip_crossing_recentred`); it stays above the
-        // bar's measured middle part and inside the frame.
-        let sample = |d: f64, y: f64| sign * plane.bilinear(axis.y_at(y) + d, y);
-        let limits = (0.0, ya as f64);
-        if let Some(t) =
-            tip_crossing_recentred(&sample, tip_guess, 2.0 * kf + 4.0, 0.5 * width_px, limits)
-        {
-            ends.push((axis, width_px, t));
+        if let Some(e) = measure_bar(plane, sign, &line, &win) {
+            ends.push(e);
         }
     }
     // One part, one focus: the row's median end shape and blur.
-    let mut cc: Vec<f64> = ends.iter().map(|e| e.2.c).collect();
-    let mut ss: Vec<f64> = ends.iter().map(|e| e.2.sigma).collect();
+    let mut cc: Vec<f64> = ends.iter().map(|e| e.tip.c).collect();
+    let mut ss: Vec<f64> = ends.iter().map(|e| e.tip.sigma).collect();
     let (c_row, s_row) = (
         grid::median(&mut cc).unwrap_or(0.0),
         grid::median(&mut ss).unwrap_or(0.0),
     );
-    for (axis, width_px, t) in &ends {
-        let ty = t.tip_y(c_row, s_row);
-        let tip = (axis.y_at(ty), ty);
-        bars.push(Bar {
+    let to_bar = |e: &BarEnd| {
+        let ty = e.tip.tip_y(c_row, s_row);
+        let tip = (e.axis.y_at(ty), ty);
+        Bar {
             tip,
-            width_px: *width_px,
+            width_px: e.width_px,
             u_px: cs * tip.0 + sn * tip.1,
             height_px: line.height_above(tip.0, tip.1),
-        });
+        }
+    };
+    for e in &ends {
+        bars.push(to_bar(e));
     }
     // Housing block ends along the row (coarse extent refined to the line).
     let (hx0, hx1) = (hx0_c as f64 * kf, (hx1_c as f64 + 1.0) * kf - 1.0);
@@ -537,6 +490,20 @@ pub fn inspect_side<P: Px>(
     let h_tol = tol.height_tol_mm.unwrap_or(f64::INFINITY);
     let positions = recipe.positions();
     let mut used = vec![false; bars.len()];
+    // The row's pins as found on the blobs: the reference for a second
+    // look where no blob made a bar.
+    let row_ref = (ends.len() >= 2).then(|| {
+        let mut w: Vec<f64> = ends.iter().map(|e| e.width_px).collect();
+        let mut c: Vec<f32> = ends.iter().map(|e| e.contrast).collect();
+        RowRef {
+            width_px: grid::median(&mut w).unwrap_or(0.0),
+            contrast: median_f32(&mut c),
+            height_px: h_nom * s,
+            pitch_px,
+            tip_half: 2.0 * kf + 4.0 + 2.0 * (h_tol * s).min(0.25 * h_nom * s),
+        }
+    });
+    let mut second_look: Vec<(BarEnd, Bar)> = Vec::new();
     let mut pins = Vec::with_capacity(positions.len());
     for &(row, col) in &positions {
         let u_nom = recipe.nominal_uv_mm(row, col).0;
@@ -552,8 +519,22 @@ pub fn inspect_side<P: Px>(
                     .total_cmp(&(b.1.u_px - u_nom_px).abs())
             });
         let mut pr = PinResult::missing(row, col, (nx, ny));
-        if let Some((i, b)) = best {
-            used[i] = true;
+        let found = match best {
+            Some((i, b)) => {
+                used[i] = true;
+                Some(b.clone())
+            }
+            None => row_ref.as_ref().and_then(|rr| {
+                let foot = sim.apply(u_nom, 0.0);
+                let e = look_again(plane, sign, &line, foot, rr)?;
+                let b = to_bar(&e);
+                ((b.u_px - u_nom_px).abs() < 0.4 * pitch_px).then(|| {
+                    second_look.push((e, b.clone()));
+                    b
+                })
+            }),
+        };
+        if let Some(b) = found {
             let du = (b.u_px - u_nom_px) * mm_per_px;
             let h = b.height_px * mm_per_px;
             pr.x_px = Some(b.tip.0);
@@ -639,7 +620,12 @@ pub fn inspect_side<P: Px>(
         // Likewise a speck just above the housing's edge measures the
         // housing (py 550 034).
         let on_edge = m.y >= line.y_at(m.x) - (0.25 * pin_px_prior).max(2.0);
-        if on_bar.near(m.x / kf, m.y / kf, reach) || on_edge {
+        // Likewise the pieces of a pin found on a second look.
+        let on_found = second_look.iter().any(|(e, b)| {
+            m.y >= b.tip.1 - 0.25 * pin_px_prior
+                && (m.x - e.axis.y_at(m.y)).abs() <= 0.5 * e.width_px + 0.25 * pin_px_prior
+        });
+        if on_bar.near(m.x / kf, m.y / kf, reach) || on_edge || on_found {
             continue;
         }
         let ar = m.area_px / tip_px;
@@ -737,3 +723,7 @@ pub fn inspect_side<P: Px>(
         warnings,
     ))
 }
+
+#[cfg(test)]
+#[path = "side_tests.rs"]
+mod tests;
