@@ -40,10 +40,22 @@ fn measure_candidates<P: Px>(
     pin_px: f64,
     opts: &InspectOptions,
 ) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
+    measure_blobs(plane, sign, cs, &cs.blobs, pin_px, opts)
+}
+
+/// Full-resolution measurement of `blobs` (of `cs`'s coarse image).
+fn measure_blobs<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    cs: &CoarseSearch,
+    blobs: &[detect::CoarseBlob],
+    pin_px: f64,
+    opts: &InspectOptions,
+) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
     let k = cs.coarse.k as f64;
     let (margin, dilate) = super::measure::tip_window(pin_px);
-    let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(cs.blobs.len());
-    for cb in &cs.blobs {
+    let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(blobs.len());
+    for cb in blobs {
         let b = &cb.blob;
         let roi = Roi::around(
             b.x_min as f64 * k,
@@ -662,6 +674,30 @@ pub fn inspect_top<P: Px>(
             ]
         }
     };
+    // Debris fainter than the coarse threshold, where it stands clear of
+    // its neighbourhood (`top_faint`): candidates for the extras only,
+    // added once every pin is placed.
+    for (m, roi, seed) in measure_blobs(
+        plane,
+        sign,
+        &cs,
+        &super::top_faint::faint_blobs(&cs, pin_px0),
+        pin_px0,
+        opts,
+    ) {
+        if cands
+            .iter()
+            .all(|c| (c.m.x - m.x).hypot(c.m.y - m.y) > 0.5 * pin_px0)
+        {
+            cands.push(Candidate {
+                m,
+                pinlike: false,
+                roi,
+                seed,
+            });
+            cand_used.push(false);
+        }
+    }
     let (extras, ignored) = super::top_extras::judge_extras(
         &super::top_extras::Leftovers {
             plane,
