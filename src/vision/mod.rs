@@ -58,6 +58,7 @@ pub mod synth_envelope;
 pub mod tip_levels;
 pub mod top;
 mod top_extras;
+mod top_window;
 pub mod truth;
 pub mod yield_acc;
 
