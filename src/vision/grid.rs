@@ -299,6 +299,41 @@ pub fn place_window(
     skipped: &dyn Fn(u32, u32) -> bool,
     anchor: Option<(f64, f64)>,
 ) -> Option<Placement> {
+    let (best, ties) = best_placements(members, rows, cols, skipped)?;
+    let amin = members.iter().map(|m| m.0).min()?;
+    let amax = members.iter().map(|m| m.0).max()?;
+    let bmin = members.iter().map(|m| m.1).min()?;
+    let bmax = members.iter().map(|m| m.1).max()?;
+    let centre_of = |row0: i64, col0: i64| {
+        (
+            col0 as f64 + (cols as f64 - 1.0) / 2.0,
+            row0 as f64 + (rows as f64 - 1.0) / 2.0,
+        )
+    };
+    let target = anchor.unwrap_or(((amin + amax) as f64 / 2.0, (bmin + bmax) as f64 / 2.0));
+    let pick = ties.iter().min_by(|x, y| {
+        let cx = centre_of(x.0, x.1);
+        let cy = centre_of(y.0, y.1);
+        let dx = (cx.0 - target.0).powi(2) + (cx.1 - target.1).powi(2);
+        let dy = (cy.0 - target.0).powi(2) + (cy.1 - target.1).powi(2);
+        dx.total_cmp(&dy)
+    })?;
+    Some(Placement {
+        row0: pick.0,
+        col0: pick.1,
+        score: best,
+        ambiguous: ties.len() > 1,
+    })
+}
+
+/// The placements `(row0, col0)` of the rows × cols window (minus
+/// `skipped`) that cover the most members, with that count.
+pub fn best_placements(
+    members: &[(i64, i64)],
+    rows: u32,
+    cols: u32,
+    skipped: &dyn Fn(u32, u32) -> bool,
+) -> Option<(usize, Vec<(i64, i64)>)> {
     if members.is_empty() {
         return None;
     }
@@ -324,27 +359,12 @@ pub fn place_window(
         }
     }
     let best = scored.iter().map(|s| s.2).max()?;
-    let ties: Vec<_> = scored.iter().filter(|s| s.2 == best).collect();
-    let centre_of = |row0: i64, col0: i64| {
-        (
-            col0 as f64 + (cols as f64 - 1.0) / 2.0,
-            row0 as f64 + (rows as f64 - 1.0) / 2.0,
-        )
-    };
-    let target = anchor.unwrap_or(((amin + amax) as f64 / 2.0, (bmin + bmax) as f64 / 2.0));
-    let pick = ties.iter().min_by(|x, y| {
-        let cx = centre_of(x.0, x.1);
-        let cy = centre_of(y.0, y.1);
-        let dx = (cx.0 - target.0).powi(2) + (cx.1 - target.1).powi(2);
-        let dy = (cy.0 - target.0).powi(2) + (cy.1 - target.1).powi(2);
-        dx.total_cmp(&dy)
-    })?;
-    Some(Placement {
-        row0: pick.0,
-        col0: pick.1,
-        score: best,
-        ambiguous: ties.len() > 1,
-    })
+    let ties = scored
+        .iter()
+        .filter(|s| s.2 == best)
+        .map(|s| (s.0, s.1))
+        .collect();
+    Some((best, ties))
 }
 
 #[cfg(test)]

@@ -60,6 +60,7 @@ pub mod tip_levels;
 pub mod top;
 mod top_extras;
 mod top_faint;
+mod top_window;
 pub mod truth;
 pub mod yield_acc;
 

@@ -86,6 +86,46 @@ fn measure_blobs<P: Px>(
     kept
 }
 
+/// The second pass's tip-like blobs worth adding to the first pass's
+/// candidates: not within half a tip of a blob the first pass has, a
+/// contrast of at least [`MIN_SNR`] σ over the noise, and a pitch (±15 %,
+/// either axis) from another tip-like blob of either pass: tips stand on
+/// the lattice, the fixture's texture and noise rarely do.
+fn faint_tips_to_add(
+    first: &[Candidate],
+    second: Vec<Candidate>,
+    pin_px: f64,
+    pitch_px: (f64, f64),
+) -> Vec<Candidate> {
+    let new: Vec<Candidate> = second
+        .into_iter()
+        .filter(|c| {
+            c.pinlike
+                && snr_of(&c.m) >= MIN_SNR
+                && first
+                    .iter()
+                    .all(|f| (f.m.x - c.m.x).hypot(f.m.y - c.m.y) > 0.5 * pin_px)
+        })
+        .collect();
+    let tips: Vec<(f64, f64)> = first
+        .iter()
+        .filter(|c| c.pinlike)
+        .chain(new.iter())
+        .map(|c| (c.m.x, c.m.y))
+        .collect();
+    let at_pitch = |d: f64| {
+        [pitch_px.0, pitch_px.1]
+            .iter()
+            .any(|&p| p > 0.0 && (d - p).abs() < 0.15 * p)
+    };
+    new.into_iter()
+        .filter(|c| {
+            tips.iter()
+                .any(|t| at_pitch((t.0 - c.m.x).hypot(t.1 - c.m.y)))
+        })
+        .collect()
+}
+
 /// Inspects one top-view image.
 pub fn inspect_top<P: Px>(
     recipe: &Recipe,
@@ -125,11 +165,17 @@ pub fn inspect_top<P: Px>(
             .collect()
     };
     let mut cands = candidates(&cs);
-    // No tip at all: small faint tips under heavy noise peak below the
-    // coarse search's noise floor with its usual smoothing box; a second
-    // pass with the wider one (`Smoothing::Faint`) finds them. Images
-    // whose tips the first pass finds are unchanged.
-    if !cands.iter().any(|c| c.pinlike) {
+    // Too few tips: small faint tips under heavy noise peak below the
+    // coarse search's noise floor with its usual smoothing box, all of
+    // them or only those in a dim part of the frame; a second pass with
+    // the wider one (`Smoothing::Faint`) finds them. With no tip at all
+    // the second pass replaces the first; otherwise the first pass's blobs
+    // stay (debris small against a tip is flattened by the wider box) and
+    // the second adds its tip-like blobs that stand a pitch from a tip
+    // (`faint_tips_to_add`). Images whose tips the first pass finds all of
+    // are unchanged.
+    let n_pinlike = |c: &[Candidate]| c.iter().filter(|c| c.pinlike).count();
+    if n_pinlike(&cands) < recipe.positions().len() {
         let cs2 = detect::coarse_search_smoothed(
             plane,
             sign,
@@ -139,9 +185,20 @@ pub fn inspect_top<P: Px>(
             detect::Smoothing::Faint,
         );
         let cands2 = candidates(&cs2);
-        if cands2.iter().any(|c| c.pinlike) {
-            cs = cs2;
-            cands = cands2;
+        if n_pinlike(&cands) == 0 {
+            if n_pinlike(&cands2) > 0 {
+                cs = cs2;
+                cands = cands2;
+            }
+        } else {
+            let (px, py) = (recipe.pitch_mm[0] * s0, recipe.pitch_mm[1] * s0);
+            let pitch = match (recipe.rows > 1, recipe.cols > 1) {
+                (true, true) => (px, py),
+                (false, _) => (px, px),
+                (true, false) => (py, py),
+            };
+            let add = faint_tips_to_add(&cands, cands2, pin_px0, pitch);
+            cands.extend(add);
         }
     }
     let pin_pts: Vec<(f64, f64)> = cands
@@ -233,11 +290,21 @@ pub fn inspect_top<P: Px>(
     );
     let anchor = housing_lat.map(|h| (0.5 * (h[0] + h[1]), 0.5 * (h[2] + h[3])));
     let skipped = |r: u32, c: u32| recipe.is_skipped(r, c);
-    let placement = grid::place_window(&members, recipe.rows, recipe.cols, &skipped, anchor)
+    let mut placement = grid::place_window(&members, recipe.rows, recipe.cols, &skipped, anchor)
         .ok_or_else(|| VisionError::NoPins {
             part: part.clone(),
             msg: "cannot place the grid".into(),
         })?;
+    let mut by_evidence = false;
+    if placement.ambiguous {
+        let (rows, cols) = (recipe.rows, recipe.cols);
+        if let Some(p) = super::top_window::settle_by_evidence(
+            &cs, &lat, &members, rows, cols, &skipped, &placement,
+        ) {
+            placement = p;
+            by_evidence = true;
+        }
+    }
     let in_window = |i: &grid::LatticeIndex| -> Option<(u32, u32)> {
         let (c, r) = (i.a - placement.col0, i.b - placement.row0);
         (c >= 0
@@ -261,7 +328,9 @@ pub fn inspect_top<P: Px>(
             ),
         });
     }
-    if placement.ambiguous {
+    if by_evidence {
+        warnings.push("pins alone do not place the grid (an end column or end pin missing): the tips' contrast at the window's places decided".into());
+    } else if placement.ambiguous {
         if housing_lat.is_some() {
             warnings.push("pins alone do not place the grid (an end column or end pin missing): the housing centre decided".into());
         } else {
@@ -573,9 +642,27 @@ pub fn inspect_top<P: Px>(
         };
         let half = (0.9 * pin_px + 2.0).min(0.5 * min_pitch_px);
         let roi = Roi::around(nx, ny, nx, ny, half, plane.w, plane.h);
-        let Some(mut m) =
-            measure::measure_blob(plane, sign, roi, (nx, ny), opts.localiser, dilate, None)
-        else {
+        // A faint tip's half-level mask runs into the window's border
+        // through noise: separated from it as the extras are.
+        let look = |apart| {
+            measure::measure_blob_split(
+                plane,
+                sign,
+                roi,
+                (nx, ny),
+                opts.localiser,
+                dilate,
+                None,
+                apart,
+            )
+        };
+        let Some(mut m) = look(false).and_then(|m| {
+            if m.touches_border {
+                look(true).or(Some(m))
+            } else {
+                Some(m)
+            }
+        }) else {
             continue;
         };
         if blurred {
@@ -724,7 +811,7 @@ pub fn inspect_top<P: Px>(
         mm_per_px_estimated: fixed.is_none(),
         fit_inliers: inliers,
         fit_rms_px: rms,
-        anchored_by_housing: placement.ambiguous && housing_lat.is_some(),
+        anchored_by_housing: placement.ambiguous && !by_evidence && housing_lat.is_some(),
     };
     let found = Findings {
         pins,
