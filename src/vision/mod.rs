@@ -58,6 +58,7 @@ pub mod synth;
 pub mod synth_envelope;
 pub mod tip_levels;
 pub mod top;
+mod top_candidates;
 mod top_extras;
 mod top_faint;
 mod top_window;

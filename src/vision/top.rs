@@ -14,13 +14,14 @@ use super::fit::{self, Similarity};
 use super::gray::{Coarse, ImageInfo, Plane, Px};
 use super::grid::{self, LatticeError};
 use super::housing::{HousingPose, find_housing, measure_pose};
-use super::measure::{self, BlobMeasure, Roi};
+use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of,
     contrast_ratio, snr_of, tip_disc_radius,
 };
+use super::top_candidates::{faint_tips_to_add, measure_blobs, measure_candidates};
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
 /// the grid's pose (four parameters, or three with mm_per_px known): the
@@ -31,100 +32,6 @@ const FEW_PINS: usize = 3;
 /// and still be the part's: one pin of two bent across their line by 0.3
 /// pitch (the most the assignment accepts) turns their fit by ≈ 0.3 rad.
 const MAX_HOUSING_TURN: f64 = 0.3;
-
-/// Full-resolution measurement of every coarse blob.
-fn measure_candidates<P: Px>(
-    plane: &Plane<P>,
-    sign: f32,
-    cs: &CoarseSearch,
-    pin_px: f64,
-    opts: &InspectOptions,
-) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
-    measure_blobs(plane, sign, cs, &cs.blobs, pin_px, opts)
-}
-
-/// Full-resolution measurement of `blobs` (of `cs`'s coarse image).
-fn measure_blobs<P: Px>(
-    plane: &Plane<P>,
-    sign: f32,
-    cs: &CoarseSearch,
-    blobs: &[detect::CoarseBlob],
-    pin_px: f64,
-    opts: &InspectOptions,
-) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
-    let k = cs.coarse.k as f64;
-    let (margin, dilate) = super::measure::tip_window(pin_px);
-    let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(blobs.len());
-    for cb in blobs {
-        let b = &cb.blob;
-        let roi = Roi::around(
-            b.x_min as f64 * k,
-            b.y_min as f64 * k,
-            (b.x_max as f64 + 1.0) * k - 1.0,
-            (b.y_max as f64 + 1.0) * k - 1.0,
-            margin,
-            plane.w,
-            plane.h,
-        );
-        let seed = cs.coarse.to_full(b.cx, b.cy);
-        if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate, None)
-        {
-            out.push((m, roi, seed));
-        }
-    }
-    // Two coarse blobs can resolve to one blob at full resolution.
-    out.sort_by(|a, b| b.0.area_px.total_cmp(&a.0.area_px));
-    let mut kept: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(out.len());
-    for m in out {
-        if kept
-            .iter()
-            .all(|q| (q.0.x - m.0.x).hypot(q.0.y - m.0.y) > 0.3 * pin_px)
-        {
-            kept.push(m);
-        }
-    }
-    kept
-}
-
-/// The second pass's tip-like blobs worth adding to the first pass's
-/// candidates: not within half a tip of a blob the first pass has, a
-/// contrast of at least [`MIN_SNR`] σ over the noise, and a pitch (±15 %,
-/// either axis) from another tip-like blob of either pass: tips stand on
-/// the lattice, the fixture's texture and noise rarely do.
-fn faint_tips_to_add(
-    first: &[Candidate],
-    second: Vec<Candidate>,
-    pin_px: f64,
-    pitch_px: (f64, f64),
-) -> Vec<Candidate> {
-    let new: Vec<Candidate> = second
-        .into_iter()
-        .filter(|c| {
-            c.pinlike
-                && snr_of(&c.m) >= MIN_SNR
-                && first
-                    .iter()
-                    .all(|f| (f.m.x - c.m.x).hypot(f.m.y - c.m.y) > 0.5 * pin_px)
-        })
-        .collect();
-    let tips: Vec<(f64, f64)> = first
-        .iter()
-        .filter(|c| c.pinlike)
-        .chain(new.iter())
-        .map(|c| (c.m.x, c.m.y))
-        .collect();
-    let at_pitch = |d: f64| {
-        [pitch_px.0, pitch_px.1]
-            .iter()
-            .any(|&p| p > 0.0 && (d - p).abs() < 0.15 * p)
-    };
-    new.into_iter()
-        .filter(|c| {
-            tips.iter()
-                .any(|t| at_pitch((t.0 - c.m.x).hypot(t.1 - c.m.y)))
-        })
-        .collect()
-}
 
 /// Inspects one top-view image.
 pub fn inspect_top<P: Px>(

@@ -1,0 +1,104 @@
+//! The top view's candidates: every coarse blob measured at full
+//! resolution (two coarse blobs that resolve to one are kept once), and
+//! which of a second, fainter pass's tip-like blobs join the first pass's.
+//! Kept apart from `top.rs`, which places the lattice and judges.
+
+use super::InspectOptions;
+use super::detect::{self, CoarseSearch};
+use super::gray::{Plane, Px};
+use super::measure::{self, BlobMeasure, Roi};
+use super::tip_levels::{Candidate, MIN_SNR, snr_of};
+
+/// Full-resolution measurement of every coarse blob.
+pub(super) fn measure_candidates<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    cs: &CoarseSearch,
+    pin_px: f64,
+    opts: &InspectOptions,
+) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
+    measure_blobs(plane, sign, cs, &cs.blobs, pin_px, opts)
+}
+
+/// Full-resolution measurement of `blobs` (of `cs`'s coarse image).
+pub(super) fn measure_blobs<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    cs: &CoarseSearch,
+    blobs: &[detect::CoarseBlob],
+    pin_px: f64,
+    opts: &InspectOptions,
+) -> Vec<(BlobMeasure, Roi, (f64, f64))> {
+    let k = cs.coarse.k as f64;
+    let (margin, dilate) = super::measure::tip_window(pin_px);
+    let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(blobs.len());
+    for cb in blobs {
+        let b = &cb.blob;
+        let roi = Roi::around(
+            b.x_min as f64 * k,
+            b.y_min as f64 * k,
+            (b.x_max as f64 + 1.0) * k - 1.0,
+            (b.y_max as f64 + 1.0) * k - 1.0,
+            margin,
+            plane.w,
+            plane.h,
+        );
+        let seed = cs.coarse.to_full(b.cx, b.cy);
+        if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate, None)
+        {
+            out.push((m, roi, seed));
+        }
+    }
+    // Two coarse blobs can resolve to one blob at full resolution.
+    out.sort_by(|a, b| b.0.area_px.total_cmp(&a.0.area_px));
+    let mut kept: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(out.len());
+    for m in out {
+        if kept
+            .iter()
+            .all(|q| (q.0.x - m.0.x).hypot(q.0.y - m.0.y) > 0.3 * pin_px)
+        {
+            kept.push(m);
+        }
+    }
+    kept
+}
+
+/// The second pass's tip-like blobs worth adding to the first pass's
+/// candidates: not within half a tip of a blob the first pass has, a
+/// contrast of at least [`MIN_SNR`] σ over the noise, and a pitch (±15 %,
+/// either axis) from another tip-like blob of either pass: tips stand on
+/// the lattice, the fixture's texture and noise rarely do.
+pub(super) fn faint_tips_to_add(
+    first: &[Candidate],
+    second: Vec<Candidate>,
+    pin_px: f64,
+    pitch_px: (f64, f64),
+) -> Vec<Candidate> {
+    let new: Vec<Candidate> = second
+        .into_iter()
+        .filter(|c| {
+            c.pinlike
+                && snr_of(&c.m) >= MIN_SNR
+                && first
+                    .iter()
+                    .all(|f| (f.m.x - c.m.x).hypot(f.m.y - c.m.y) > 0.5 * pin_px)
+        })
+        .collect();
+    let tips: Vec<(f64, f64)> = first
+        .iter()
+        .filter(|c| c.pinlike)
+        .chain(new.iter())
+        .map(|c| (c.m.x, c.m.y))
+        .collect();
+    let at_pitch = |d: f64| {
+        [pitch_px.0, pitch_px.1]
+            .iter()
+            .any(|&p| p > 0.0 && (d - p).abs() < 0.15 * p)
+    };
+    new.into_iter()
+        .filter(|c| {
+            tips.iter()
+                .any(|t| at_pitch((t.0 - c.m.x).hypot(t.1 - c.m.y)))
+        })
+        .collect()
+}
