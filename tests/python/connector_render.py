@@ -650,6 +650,9 @@ def finish(rng, f, canvas):
             for oy in off:
                 for ox in off:
                     k += (np.hypot(xx + ox, yy + oy) <= R)
+            if k.sum() == 0:
+                # A disc narrower than the 1/8-pixel sampling: a point.
+                k[n, n] = 1.0
             k /= k.sum()
             img = cv2.filter2D(img, -1, k.astype(np.float32), borderType=cv2.BORDER_REFLECT)
             if kind == "mixed":
