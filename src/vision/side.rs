@@ -597,15 +597,7 @@ pub fn inspect_side<P: Px>(
     let on_bar = BarMask::new(cw, ch, &bar_blobs, &lab.runs);
     let reach = ((0.25 * pin_px_prior).max(2.0) / kf).ceil() as usize;
     for d in &dust_blobs {
-        let roi = Roi::around(
-            d.x_min as f64 * kf,
-            d.y_min as f64 * kf,
-            (d.x_max as f64 + 1.0) * kf - 1.0,
-            (d.y_max as f64 + 1.0) * kf - 1.0,
-            margin,
-            plane.w,
-            plane.h,
-        );
+        let roi = Roi::around_coarse(d, kf, margin, plane.w, plane.h);
         let seed = coarse.to_full(d.cx, d.cy);
         let Some(m) =
             measure::measure_blob(plane, sign, roi, seed, Localiser::Coverage, dilate, None)

@@ -34,15 +34,7 @@ pub(super) fn measure_blobs<P: Px>(
     let mut out: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(blobs.len());
     for cb in blobs {
         let b = &cb.blob;
-        let roi = Roi::around(
-            b.x_min as f64 * k,
-            b.y_min as f64 * k,
-            (b.x_max as f64 + 1.0) * k - 1.0,
-            (b.y_max as f64 + 1.0) * k - 1.0,
-            margin,
-            plane.w,
-            plane.h,
-        );
+        let roi = Roi::around_coarse(b, k, margin, plane.w, plane.h);
         let seed = cs.coarse.to_full(b.cx, b.cy);
         if let Some(m) = measure::measure_blob(plane, sign, roi, seed, opts.localiser, dilate, None)
         {
