@@ -68,18 +68,14 @@ impl Roi {
             y1: cl((y1 + m).ceil() + 1.0, h),
         }
     }
-    /// The full-resolution rectangle under a blob of a coarse image that
-    /// is `k` times smaller, grown by `m`, clipped to w × h.
+    /// The full-resolution window under a blob of a `k`× smaller image, grown by `m`.
     pub fn around_coarse(b: &super::label::Blob, k: f64, m: f64, w: usize, h: usize) -> Roi {
-        Roi::around(
-            b.x_min as f64 * k,
-            b.y_min as f64 * k,
-            (b.x_max as f64 + 1.0) * k - 1.0,
-            (b.y_max as f64 + 1.0) * k - 1.0,
-            m,
-            w,
-            h,
-        )
+        let (x0, y0) = (b.x_min as f64 * k, b.y_min as f64 * k);
+        let (x1, y1) = (
+            (b.x_max + 1) as f64 * k - 1.0,
+            (b.y_max + 1) as f64 * k - 1.0,
+        );
+        Roi::around(x0, y0, x1, y1, m, w, h)
     }
     pub fn w(&self) -> usize {
         self.x1.saturating_sub(self.x0)
