@@ -88,6 +88,8 @@ pub struct CoarseSearch {
     /// Typical tip contrast on the top-hat (median blob peak).
     pub tip_contrast: f32,
     pub threshold: f32,
+    /// See [`Found::noise_floor`].
+    pub noise_floor: f32,
     pub blobs: Vec<CoarseBlob>,
 }
 
@@ -125,6 +127,7 @@ pub fn coarse_search_smoothed<P: Px>(
         background: f.background,
         tip_contrast: f.tip_contrast,
         threshold: f.threshold,
+        noise_floor: f.noise_floor,
         blobs: f.blobs,
     }
 }
@@ -138,6 +141,10 @@ pub struct Found {
     pub background: Vec<f32>,
     pub tip_contrast: f32,
     pub threshold: f32,
+    /// The top-hat's noise floor: its median + 6 σ (σ from the median
+    /// absolute deviation of every 7th value, mostly background). The
+    /// threshold is the larger of this and 0.35 of the tip contrast.
+    pub noise_floor: f32,
     pub blobs: Vec<CoarseBlob>,
 }
 
@@ -258,7 +265,8 @@ pub fn search_coarse_smoothed(
         let m = dev.len() / 2;
         *dev.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
     };
-    let threshold = (0.35 * tip_contrast).max(med + 6.0 * 1.4826 * mad);
+    let noise_floor = med + 6.0 * 1.4826 * mad;
+    let threshold = (0.35 * tip_contrast).max(noise_floor);
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
     let blobs = split_blobs(&lab, &tophat, w, threshold, &too_big)
         .into_iter()
@@ -272,6 +280,7 @@ pub fn search_coarse_smoothed(
         background,
         tip_contrast,
         threshold,
+        noise_floor,
         blobs,
     }
 }

@@ -28,17 +28,7 @@ pub(super) fn faint_blobs(cs: &CoarseSearch, pin_px: f64) -> Vec<CoarseBlob> {
     }
     let pin_c = pin_px / cs.coarse.k as f64;
     let tip_area_c = pin_c * pin_c;
-    // The noise floor as the coarse search sets it (6 σ of the top-hat).
-    let mut sample: Vec<f32> = th.iter().step_by(7).cloned().collect();
-    if sample.is_empty() {
-        return Vec::new();
-    }
-    let mid = sample.len() / 2;
-    let med = *sample.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
-    let mut dev: Vec<f32> = sample.iter().map(|v| (v - med).abs()).collect();
-    let mad = *dev.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
-    let floor = med + 6.0 * 1.4826 * mad;
-    let level = (FAINT_LEVEL * cs.tip_contrast).max(floor);
+    let level = (FAINT_LEVEL * cs.tip_contrast).max(cs.noise_floor);
     if level >= cs.threshold {
         return Vec::new();
     }

@@ -147,6 +147,7 @@ mod tests {
             background: vec![0.0; w * h],
             tip_contrast: 1.0,
             threshold: 0.35,
+            noise_floor: 0.0,
             blobs: Vec::new(),
         };
         (cs, lat)
