@@ -6,7 +6,9 @@
 //!
 //! `--save DIR` writes each wrongly judged image (PNG, 16-bit where the
 //! case was), its truth and its recipe for a closer look; `--list` prints
-//! one line per wrong case.
+//! one line per wrong case; `--bound` adds, for the top views' ok pins, the
+//! Cramér–Rao lower bound on the centre error (what any unbiased
+//! measurement could reach in that image) beside the measured error.
 use pinsight::vision::synth_envelope::{EnvelopeCase, Factors, Rendered};
 use pinsight::vision::{self, InspectOptions, Verdict};
 use rayon::prelude::*;
@@ -19,6 +21,8 @@ struct Outcome {
     pins: usize,
     pin_wrong: usize,
     ok_sq: Vec<f64>,
+    /// Top view, truly ok pins: (centre error px, Cramér–Rao bound px).
+    top_ok: Vec<(f64, f64)>,
     detail: String,
     secs_inspect: f64,
 }
@@ -33,6 +37,7 @@ fn main() {
         .and_then(|i| args.get(i + 1))
         .map(std::path::PathBuf::from);
     let list = args.iter().any(|a| a == "--list");
+    let bound = args.iter().any(|a| a == "--bound");
     if let Some(seed) = args
         .iter()
         .position(|a| a == "--show")
@@ -62,6 +67,7 @@ fn main() {
                 pins: r.truth.pins.len(),
                 pin_wrong: 0,
                 ok_sq: Vec::new(),
+                top_ok: Vec::new(),
                 detail: String::new(),
                 secs_inspect,
             };
@@ -76,6 +82,18 @@ fn main() {
                     o.verdict_ok = c.verdict_ok;
                     o.pin_wrong = c.status_mismatches.len();
                     o.ok_sq = Rendered::ok_centre_errors(&c).iter().map(|e| e * e).collect();
+                    if bound {
+                        let b = case.centre_bounds();
+                        o.top_ok = c
+                            .centre_errors
+                            .iter()
+                            .filter(|e| e.2 == pinsight::vision::PinStatus::Ok)
+                            .filter_map(|e| {
+                                let (_, _, bp) = b.iter().find(|q| q.0 == e.0 && q.1 == e.1)?;
+                                Some((e.3.hypot(e.4), *bp))
+                            })
+                            .collect();
+                    }
                     if !c.verdict_ok || o.pin_wrong > 0 {
                         o.detail = format!(
                             "verdict {:?} (truth {:?}), pins {:?}, extras found {}/{} spurious {}{}",
@@ -157,9 +175,32 @@ fn report(o: &[Outcome], wall: f64, list: bool) {
         pct(pins - pins_wrong, pins),
         sq.len()
     );
+    let bounded: Vec<(f64, f64)> = o.iter().flat_map(|x| x.top_ok.iter().cloned()).collect();
+    if !bounded.is_empty() {
+        let rms = |v: &[f64]| (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt();
+        let errs: Vec<f64> = bounded.iter().map(|p| p.0).collect();
+        let bounds: Vec<f64> = bounded.iter().map(|p| p.1).collect();
+        let fine: Vec<(f64, f64)> = bounded.iter().cloned().filter(|p| p.0 <= 1.0).collect();
+        let below = bounds.iter().filter(|b| **b <= 0.1).count();
+        println!(
+            "top view, ok pins ({}): centre RMS {:.4} px; Cramér–Rao lower bound on that RMS {:.4} px (any unbiased measurement); within 1 px ({:.2} %): RMS {:.4} px against a bound of {:.4} px; pins whose bound allows 0.10 px RMS: {:.1} %",
+            bounded.len(),
+            rms(&errs),
+            rms(&bounds),
+            100.0 * fine.len() as f64 / bounded.len() as f64,
+            rms(&fine.iter().map(|p| p.0).collect::<Vec<_>>()),
+            rms(&fine.iter().map(|p| p.1).collect::<Vec<_>>()),
+            100.0 * below as f64 / bounds.len() as f64,
+        );
+    }
     // Numeric factors: four equal-width bins over the observed range.
     println!(
-        "\nper factor: bin, images, verdicts right, errors, pin statuses right, ok-pin RMS px"
+        "\nper factor: bin, images, verdicts right, errors, pin statuses right, ok-pin RMS px{}",
+        if bounded.is_empty() {
+            ""
+        } else {
+            "; top view ok pins within 1 px: RMS px, bound px"
+        }
     );
     let names: Vec<&str> = o[0].f.numeric().iter().map(|p| p.0).collect();
     for (k, name) in names.iter().enumerate() {
@@ -266,8 +307,23 @@ fn line(label: &str, sel: &[&Outcome]) {
     let pw: usize = sel.iter().map(|x| x.pin_wrong).sum();
     let sq: Vec<f64> = sel.iter().flat_map(|x| x.ok_sq.iter().cloned()).collect();
     let rms = (sq.iter().sum::<f64>() / sq.len().max(1) as f64).sqrt();
+    let fine: Vec<(f64, f64)> = sel
+        .iter()
+        .flat_map(|x| x.top_ok.iter().cloned())
+        .filter(|p| p.0 <= 1.0)
+        .collect();
+    let bound = if fine.is_empty() {
+        String::new()
+    } else {
+        let m = fine.len() as f64;
+        format!(
+            " {:.3} {:.3}",
+            (fine.iter().map(|p| p.0 * p.0).sum::<f64>() / m).sqrt(),
+            (fine.iter().map(|p| p.1 * p.1).sum::<f64>() / m).sqrt()
+        )
+    };
     println!(
-        "  {label:34} {n:6} {:>9} {err:4} {:>9} {rms:.3}",
+        "  {label:34} {n:6} {:>9} {err:4} {:>9} {rms:.3}{bound}",
         pct(right, n),
         pct(pins - pw, pins)
     );

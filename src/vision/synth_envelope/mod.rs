@@ -703,6 +703,7 @@ impl EnvelopeCase {
     }
 }
 
+mod bound;
 mod paint;
 mod raster;
 #[cfg(test)]

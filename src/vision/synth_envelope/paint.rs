@@ -207,16 +207,7 @@ impl EnvelopeCase {
     /// when the case says so) and its truth.
     pub fn render(&self) -> Result<Rendered, String> {
         let f = &self.factors;
-        let (w, h) = (f.width as usize, f.height as usize);
-        let mut img = vec![0f32; w * h];
-        let (truth_pins, truth_extras) = match self.recipe.view {
-            View::Top => self.paint_top(&mut img),
-            View::Side => self.paint_side(&mut img),
-        };
-        self.illuminate(&mut img);
-        if f.blur_px > 0.2 {
-            blur(&mut img, w, h, f.blur_px);
-        }
+        let (img, truth_pins, truth_extras) = self.scene();
         let (gray, info) = self.expose(&img)?;
         let verdict = Truth::verdict_of(&truth_pins, &truth_extras);
         let truth = Truth {
@@ -233,6 +224,38 @@ impl EnvelopeCase {
             })),
         };
         Ok(Rendered { gray, info, truth })
+    }
+
+    /// The light reaching the sensor before the camera (8-bit units, before
+    /// gain): the part painted, illuminated and blurred, with its truth.
+    pub(super) fn scene(&self) -> (Vec<f32>, Vec<TruthPin>, Vec<TruthExtra>) {
+        let f = &self.factors;
+        let (w, h) = (f.width as usize, f.height as usize);
+        let mut img = vec![0f32; w * h];
+        let (truth_pins, truth_extras) = match self.recipe.view {
+            View::Top => self.paint_top(&mut img),
+            View::Side => self.paint_side(&mut img),
+        };
+        self.illuminate(&mut img);
+        if f.blur_px > 0.2 {
+            blur(&mut img, w, h, f.blur_px);
+        }
+        (img, truth_pins, truth_extras)
+    }
+
+    /// Noise variance (8-bit units²) of a pixel whose exposed value is `v`
+    /// (after gain): read noise plus shot noise as `expose` draws them,
+    /// plus the quantisation of the stored bit depth.
+    pub(super) fn noise_variance(&self, v: f32) -> f32 {
+        let f = &self.factors;
+        let rf = self.look.read_fraction as f32;
+        let step = match f.bits {
+            8 => 1.0,
+            12 => 255.0 / 4095.0,
+            _ => 255.0 / 65535.0,
+        };
+        let sigma = f.noise_dn as f32;
+        sigma * sigma * (rf + (1.0 - rf) * (v.max(0.0) / 128.0)) + step * step / 12.0
     }
 
     pub(super) fn contrast_level(&self, v: f64) -> f32 {
