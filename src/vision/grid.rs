@@ -188,6 +188,23 @@ pub fn estimate_lattice(
             }
         }
     }
+    // Still none: diagonal neighbours (a 2 × 2 part with two opposite pins
+    // missing) give the rotation as their direction less the diagonal's.
+    if angles.is_empty() && pitch_px.is_some() && rows > 1 && cols > 1 {
+        let (diag, alpha) = (px.hypot(py), py.atan2(px));
+        for i in 0..n {
+            for j in (i + 1)..n {
+                let (mut dx, mut dy) = (pts[j].0 - pts[i].0, pts[j].1 - pts[i].1);
+                if dx < 0.0 {
+                    (dx, dy) = (-dx, -dy);
+                }
+                let ang = dy.atan2(dx);
+                if (dx.hypot(dy) / diag - 1.0).abs() < 0.1 && (ang.abs() - alpha).abs() < tilt {
+                    angles.push(ang - alpha.copysign(ang));
+                }
+            }
+        }
+    }
     if angles.is_empty() && n >= 3 && pitch_px.is_some() {
         let mut d = nearest(true);
         d.extend(nearest(false));

@@ -28,7 +28,9 @@
 //! fragments of large tips run out of their window); one that fails gives
 //! way to the next. When no lattice at one pitch holds, spacings of two
 //! or three pitches are tried and the tips' own measured width picks the
-//! multiple (a 1 × 3 part without its middle pin).
+//! multiple (a 1 × 3 part without its middle pin), and on a grid of two
+//! rows and columns or more, diagonal neighbours (a 2 × 2 part with two
+//! opposite pins missing).
 
 use super::detect::{self, CoarseBlob, Smoothing};
 use super::error::VisionError;
@@ -219,6 +221,44 @@ fn score_blobs(recipe: &Recipe, pts: &[TipBlob], w: f64, mult: f64) -> Candidate
         pts: matched_pts,
         boxes,
     }
+}
+
+/// Scores the blobs found at tip width `w` as tips one pitch apart along
+/// both axes at once: a grid's diagonal neighbours (a 2 × 2 part with two
+/// opposite pins missing has no pair along a row or a column). Spacings
+/// are converted to the x pitch.
+fn score_diagonal(recipe: &Recipe, pts: &[TipBlob], w: f64) -> Candidate {
+    let px = w * recipe.pitch_mm[0] / recipe.pin_mm;
+    let py = w * recipe.pitch_mm[1] / recipe.pin_mm;
+    let (diag, alpha) = (px.hypot(py), py.atan2(px));
+    let tilt = super::grid::MAX_TILT_DEG.to_radians();
+    let mut c = score_blobs(recipe, &[], w, 1.0);
+    let mut peaks = Vec::new();
+    for (i, &(xi, yi, wi, pi, bi)) in pts.iter().enumerate() {
+        // Nearest blob further on (+x) whose direction lies within the
+        // tilt of either diagonal.
+        let d = pts
+            .iter()
+            .enumerate()
+            .filter(|&(j, p)| j != i && p.0 > xi)
+            .filter(|(_, p)| {
+                let a = (p.1 - yi).atan2(p.0 - xi);
+                (a.abs() - alpha).abs() <= tilt
+            })
+            .map(|(_, p)| (p.0 - xi).hypot(p.1 - yi))
+            .fold(f64::INFINITY, f64::min);
+        if (d / diag - 1.0).abs() < 0.15 {
+            c.score += 1;
+            c.support += 1;
+            c.spacings.push(d * px / diag);
+            c.widths.push(wi);
+            peaks.push(pi);
+            c.pts.push((xi, yi));
+            c.boxes.push(bi);
+        }
+    }
+    c.peak = super::grid::median(&mut peaks).unwrap_or(0.0);
+    c
 }
 
 /// The most blobs a perfect image of the part can match: positions with a
@@ -469,11 +509,18 @@ fn estimate_smoothed<P: Px>(
                 tried.push((w, pts));
             }
             let (wt, pts) = &tried[i];
-            for mult in [2.0, 3.0] {
-                if (n_max as f64) <= mult {
+            // 0.0: diagonal neighbours (below).
+            for mult in [2.0, 3.0, 0.0] {
+                let c = if mult == 0.0 {
+                    if recipe.rows < 2 || recipe.cols < 2 {
+                        continue;
+                    }
+                    score_diagonal(recipe, pts, *wt)
+                } else if (n_max as f64) <= mult {
                     continue;
-                }
-                let c = score_blobs(recipe, pts, *wt, mult);
+                } else {
+                    score_blobs(recipe, pts, *wt, mult)
+                };
                 if c.score > 0
                     && let Some(r) = tips_hold(plane, sign, recipe, &c)
                 {

@@ -66,3 +66,25 @@ fn a_bent_pin_of_two_or_three_is_placed_by_the_housing() {
         }
     }
 }
+
+/// A 2 × 2 part with two opposite pins missing, the scale not given: the
+/// two tips left stand a diagonal apart, with no neighbour along a row or
+/// a column. They are still the part's lattice (the recipe's pitch-to-tip
+/// ratio along the diagonal), so the part is judged, not an error: the two
+/// tips ok, the two others missing.
+#[test]
+fn two_opposite_tips_of_a_two_by_two_part_are_its_lattice() {
+    let r = recipe(2, 2, false);
+    for (gone, rot) in [([0usize, 3usize], 3.0), ([1, 2], -4.0), ([0, 3], -1.5)] {
+        let mut sc = Scene::nominal(&r, 0.03);
+        sc.rotation_deg = rot;
+        sc.noise_dn = 4.0;
+        sc.blur_px = 1.0;
+        for k in gone {
+            sc.pins[k].present = false;
+        }
+        let (found, truth) = statuses(&sc);
+        assert_eq!(truth[gone[0]], PinStatus::Missing);
+        assert_eq!(found, truth, "pins {gone:?} missing, rotation {rot}");
+    }
+}
