@@ -357,17 +357,19 @@ pub fn consensus_similarity(
             let sim = refit_on_consensus(model, image, fixed_scale, sim, tau_px);
             let r = residuals(model, image, &sim);
             let off = r.iter().filter(|&&ri| ri >= tau_px).count();
-            if off > max_off {
+            // A proposal that keeps every pin is no better than the robust
+            // fit from `init`: least squares over pins legitimately off
+            // within tolerance would move the good pins' reported offsets.
+            if off == 0 || off > max_off {
                 continue;
             }
-            let clear = off == 0
-                || r.iter().all(|&ri| {
-                    if ri >= tau_px {
-                        ri >= LEFT_OUT_MIN_TOL * tau_px
-                    } else {
-                        ri <= KEPT_MAX_TOL * tau_px
-                    }
-                });
+            let clear = r.iter().all(|&ri| {
+                if ri >= tau_px {
+                    ri >= LEFT_OUT_MIN_TOL * tau_px
+                } else {
+                    ri <= KEPT_MAX_TOL * tau_px
+                }
+            });
             if !clear {
                 continue;
             }
