@@ -144,16 +144,7 @@ pub fn robust_similarity(
         Some(s) => s,
         None => fit_similarity(model, image, &vec![1.0; n], fixed_scale, fallback)?,
     };
-    let resid = |sim: &Similarity| -> Vec<f64> {
-        model
-            .iter()
-            .zip(image)
-            .map(|(m, p)| {
-                let q = sim.apply(m.0, m.1);
-                ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt()
-            })
-            .collect()
-    };
+    let resid = |sim: &Similarity| residuals(model, image, sim);
     let mut sigma = min_sigma_px;
     let mut w = vec![1.0; n];
     for _ in 0..10 {
@@ -184,17 +175,10 @@ pub fn robust_similarity(
         sim = final_fit;
     }
     let r = resid(&sim);
-    let (mut ss, mut k) = (0.0, 0usize);
-    for (ri, &b) in r.iter().zip(&inlier) {
-        if b {
-            ss += ri * ri;
-            k += 1;
-        }
-    }
     Some(RobustFit {
         sim,
+        rms_px: inlier_rms(&r, &inlier),
         inlier,
-        rms_px: rms_of(ss, k),
         sigma_px: sigma,
     })
 }
@@ -284,15 +268,28 @@ fn refit_on_consensus(
     sim
 }
 
+/// Each point's distance from where `sim` puts its model point (px).
 fn residuals(model: &[(f64, f64)], image: &[(f64, f64)], sim: &Similarity) -> Vec<f64> {
     model
         .iter()
         .zip(image)
         .map(|(m, p)| {
             let q = sim.apply(m.0, m.1);
-            (q.0 - p.0).hypot(q.1 - p.1)
+            ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt()
         })
         .collect()
+}
+
+/// RMS of the inliers' residuals.
+fn inlier_rms(r: &[f64], inlier: &[bool]) -> f64 {
+    let (mut ss, mut k) = (0.0, 0usize);
+    for (ri, &b) in r.iter().zip(inlier) {
+        if b {
+            ss += ri * ri;
+            k += 1;
+        }
+    }
+    rms_of(ss, k)
 }
 
 /// A pin left out of a consensus fit must stand at least this many
@@ -385,19 +382,12 @@ pub fn consensus_similarity(
     };
     let r = residuals(model, image, &sim);
     let inlier: Vec<bool> = r.iter().map(|&ri| ri < tau_px).collect();
-    let (mut ss, mut k) = (0.0, 0usize);
-    for (ri, &b) in r.iter().zip(&inlier) {
-        if b {
-            ss += ri * ri;
-            k += 1;
-        }
-    }
     let mut rr = r.clone();
     let sigma_px = (1.4826 * median(&mut rr)).max(min_sigma_px);
     Some(RobustFit {
         sim,
+        rms_px: inlier_rms(&r, &inlier),
         inlier,
-        rms_px: rms_of(ss, k),
         sigma_px,
     })
 }
