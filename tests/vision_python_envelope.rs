@@ -153,3 +153,45 @@ fn large_tips_are_scaled_by_their_own_lattice() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Dark round tips (35 px) on a white one-row housing about 2.5 tips tall,
+/// on a fixture darker than the tips, scale not given (seed 590 370, a
+/// tuning seed since 2026-12-02). The coarse search's background closing,
+/// wider than the housing, filled the whole band to the fixture's level,
+/// no tip stood in the top-hat, and the image was a `no_pins` error ("no
+/// tip-sized dark blob found"). The last pass bounds the closing to a
+/// clearance hole's reach (`detect::Smoothing::HoleReach`): every pin is
+/// found and the verdict, every pin's status and the scale match the
+/// renderer's truth.
+#[test]
+fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("pinsight-pyband-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let seed = 590_370u64;
+    let st = Command::new("python3")
+        .arg(root.join("tests/python/connector_render.py"))
+        .arg(&dir)
+        .arg(seed.to_string())
+        .arg("1")
+        .status()
+        .expect("python3 with numpy, opencv-python-headless and Pillow");
+    assert!(st.success(), "the Python renderer failed");
+    let text = std::fs::read_to_string(dir.join(format!("py-{seed:06}.json"))).expect("truth");
+    let t = truth::Truth::from_json(&text).expect("truth");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let recipe = Recipe::load(&dir.join(&t.recipe)).expect("recipe");
+    let img = dir.join(v["image"].as_str().expect("image name"));
+    let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
+        .unwrap_or_else(|e| panic!("{seed}: {e}"));
+    let c = truth::compare(&ins, &t, 15.0);
+    assert!(c.verdict_ok, "{seed}: {:?}", c.status_mismatches);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    let want = v["mm_per_px"].as_f64().expect("true scale");
+    assert!(
+        (ins.grid.mm_per_px / want - 1.0).abs() < 0.02,
+        "mm_per_px {} against {want}",
+        ins.grid.mm_per_px
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -190,6 +190,16 @@ pub enum Smoothing {
     /// whose peaks stand below the first pass's 6 σ floor); debris small
     /// against a tip is flattened more by it.
     Faint,
+    /// [`Smoothing::Normal`]'s box, with the background's closing bounded
+    /// to a clearance hole's reach ([`morph::background_square`]). For the
+    /// last pass only, when neither other pass finds a tip: a one-row
+    /// housing narrower than the closing's window, on a fixture beyond the
+    /// tips' level (dark tips on a white housing on a black fixture), is
+    /// filled to the fixture's level by the unbounded closing and its tips
+    /// vanish from the top-hat. Bounded everywhere, the closing leaves the
+    /// valleys of a textured fixture unfilled and the threshold rises over
+    /// faint debris; so it is the last resort, not the rule.
+    HoleReach,
 }
 
 /// [`search_coarse_expecting`] with the smoothing box of `smoothing`.
@@ -207,7 +217,7 @@ pub fn search_coarse_smoothed(
     // noise falls by the box's width, a tip's (or a quarter-tip debris')
     // peak does not.
     let m = match smoothing {
-        Smoothing::Normal => (pin_c / 4.0).floor() as usize,
+        Smoothing::Normal | Smoothing::HoleReach => (pin_c / 4.0).floor() as usize,
         Smoothing::Faint => (pin_c / 2.5).round() as usize,
     };
     let smooth = if m >= 1 {
@@ -215,7 +225,13 @@ pub fn search_coarse_smoothed(
     } else {
         std::borrow::Cow::Borrowed(&coarse.data)
     };
-    let background = morph::background_square(&smooth, coarse.w, coarse.h, r);
+    // Bounded, the closing fills clearance holes (diameter up to 1.8 tips,
+    // blurred by up to 3 px) and reaches no further.
+    let reach = match smoothing {
+        Smoothing::HoleReach => ((0.9 * pin_px + 3.0) / k as f64).ceil() as usize,
+        _ => r,
+    };
+    let background = morph::background_square(&smooth, coarse.w, coarse.h, r, reach);
     let tophat: Vec<f32> = smooth
         .iter()
         .zip(&background)

@@ -187,14 +187,30 @@ pub fn box_mean(data: &[f32], w: usize, h: usize, m: usize) -> Vec<f32> {
 /// there (clearance holes, an empty hole's moat, the bright-lit holes of a
 /// back-lit part seen in the inverted polarity), so the result follows the
 /// housing and the fixture, not the holes around each tip.
-pub fn background_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
-    let mut b = open_square(data, w, h, r);
+///
+/// The closing fills dark structure up to `reach` from its edge and no
+/// further: the result is capped by the opening's dilation of radius
+/// `reach`. A clearance hole is filled (its rim is within reach of every
+/// point of it), but a one-row housing narrower than the closing's window,
+/// on a fixture beyond the tips' level (a dark part on a black fixture seen
+/// in the inverted polarity), is not: unbounded, the closing raised the
+/// whole housing band to the fixture's level and the tips on it vanished
+/// from the top-hat. With `reach ≥ r` the cap is inactive.
+pub fn background_square(data: &[f32], w: usize, h: usize, r: usize, reach: usize) -> Vec<f32> {
+    let open = open_square(data, w, h, r);
+    let mut b = open.clone();
     pass_vertical::<true>(&mut b, w, h, r);
     let mut t = transpose(&b, w, h);
     pass_vertical::<true>(&mut t, h, w, r);
     pass_vertical::<false>(&mut t, h, w, r);
     let mut c = transpose(&t, h, w);
     pass_vertical::<false>(&mut c, w, h, r);
+    if reach < r {
+        let cap = dilate_square(&open, w, h, reach);
+        for (c, m) in c.iter_mut().zip(cap) {
+            *c = c.min(m);
+        }
+    }
     c
 }
 
@@ -202,7 +218,7 @@ pub fn background_square(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32>
 /// zero: a tip's contrast against the housing around it, whatever the
 /// level of its clearance hole.
 pub fn background_top_hat(data: &[f32], w: usize, h: usize, r: usize) -> Vec<f32> {
-    let b = background_square(data, w, h, r);
+    let b = background_square(data, w, h, r, r);
     data.iter().zip(b).map(|(a, b)| (a - b).max(0.0)).collect()
 }
 
@@ -270,7 +286,7 @@ mod tests {
                 d[y * w + x] = 150.0;
             }
         }
-        let bg = background_square(&d, w, h, 8);
+        let bg = background_square(&d, w, h, 8, 8);
         assert!(bg.iter().all(|&v| (v - 100.0).abs() < 1e-4));
         let th = background_top_hat(&d, w, h, 8);
         assert_eq!(th[20 * w + 20], 50.0);

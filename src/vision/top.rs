@@ -108,6 +108,23 @@ pub fn inspect_top<P: Px>(
             cands.extend(add);
         }
     }
+    // Still no tip: the last pass bounds the background's closing to a
+    // clearance hole's reach (`Smoothing::HoleReach`).
+    if n_pinlike(&cands) == 0 {
+        let cs3 = detect::coarse_search_smoothed(
+            plane,
+            sign,
+            pin_px0,
+            None,
+            n_pos,
+            detect::Smoothing::HoleReach,
+        );
+        let cands3 = candidates(&cs3);
+        if n_pinlike(&cands3) > 0 {
+            cs = cs3;
+            cands = cands3;
+        }
+    }
     let pin_pts: Vec<(f64, f64)> = cands
         .iter()
         .filter(|c| c.pinlike)
