@@ -117,7 +117,7 @@ pub struct TipFit {
 /// a few million evaluations per image, and this precision is far below
 /// the noise of any pixel.
 #[inline]
-fn erf(x: f64) -> f64 {
+pub(super) fn erf(x: f64) -> f64 {
     let s = x.signum();
     let x = x.abs();
     let t = 1.0 / (1.0 + 0.327_591_1 * x);

@@ -53,6 +53,7 @@ pub mod scale;
 pub mod side;
 mod side_bar;
 mod side_edge;
+mod side_end;
 mod side_row;
 pub mod synth;
 pub mod synth_envelope;

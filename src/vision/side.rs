@@ -30,6 +30,7 @@ use super::side_edge::{
     BarMask, body_x_range, drop_steep_tops, edge_profile, run_tops, silhouette_level,
     silhouette_threshold,
 };
+use super::side_end::{EndAt, row_end_offset};
 use super::side_row::{
     first_rise, median_f32, refine_pitch, robust_offset_scale, row_fits_lattice,
 };
@@ -275,8 +276,27 @@ pub fn inspect_side<P: Px>(
         grid::median(&mut cc).unwrap_or(0.0),
         grid::median(&mut ss).unwrap_or(0.0),
     );
+    // Where the apex lies from each bar's band crossing: the row's mean
+    // end image fitted by a blurred end model (`side_end`); the old
+    // contour correction where that cannot be measured.
+    let end_offset = {
+        let mut w: Vec<f64> = ends.iter().map(|e| e.width_px).collect();
+        let hw0 = 0.5 * grid::median(&mut w).unwrap_or(0.0);
+        let at: Vec<EndAt> = ends
+            .iter()
+            .map(|e| EndAt {
+                axis: e.axis,
+                y_band: e.tip.y_band,
+                base: line.y_at(e.axis.y_at(e.tip.y_band)),
+            })
+            .collect();
+        row_end_offset(plane, sign, &at, hw0, s_row)
+    };
     let to_bar = |e: &BarEnd| {
-        let ty = e.tip.tip_y(c_row, s_row);
+        let ty = match end_offset {
+            Some(a) => e.tip.y_band + a,
+            None => e.tip.tip_y(c_row, s_row),
+        };
         let tip = (e.axis.y_at(ty), ty);
         Bar {
             tip,

@@ -294,6 +294,13 @@ pub(super) struct TipCrossing {
     pub c: f64,
     /// Blur σ from the near-axis profile's 25–75 % rise, px.
     pub sigma: f64,
+    /// Half-level crossing of the profile averaged across the middle of
+    /// the width (seven offsets over ±½ of the half-width) and smoothed
+    /// along the axis by 0.6 σ, y px: the end's position with a few times
+    /// less noise than `y_in`; its offset from the apex (which depends on
+    /// the end's shape and the blur) is the row's, measured by
+    /// [`super::side_end::row_end_offset`].
+    pub y_band: f64,
 }
 
 impl TipCrossing {
@@ -363,12 +370,57 @@ pub(super) fn tip_crossing(
             c = ((yo - y_in) / (dout * dout - e_in)).clamp(0.0, 1.0 / half_w);
         }
     }
+    let y_band = if half_w >= 2.0 {
+        let band = smooth_along(
+            &prof_at(&BAND_OFFSETS.map(|f| f * half_w)),
+            0.6 * sigma / STEP,
+        );
+        let (lo_b, hi_b) = levels(&band);
+        match at(&band, lo_b, hi_b, 0.5) {
+            Some(y) if (y - y_in).abs() <= 2.0 * sigma.max(1.0) => y,
+            _ => y_in,
+        }
+    } else {
+        y_in
+    };
     Some(TipCrossing {
         y_in,
         e_in,
         c,
         sigma,
+        y_band,
     })
+}
+
+/// Lateral offsets of the band profile, in half-widths.
+const BAND_OFFSETS: [f64; 7] = [-0.5, -1.0 / 3.0, -1.0 / 6.0, 0.0, 1.0 / 6.0, 1.0 / 3.0, 0.5];
+
+/// A profile smoothed by a Gaussian of `s` samples (at most 6; none under
+/// 1), its ends renormalised: a symmetric second blur moves no half-level
+/// crossing of a straight step, and averages the noise down.
+fn smooth_along(raw: &[f32], s: f64) -> Vec<f32> {
+    let s = s.min(6.0);
+    if !(s >= 1.0) {
+        return raw.to_vec();
+    }
+    let r = (3.0 * s).ceil() as i64;
+    let k: Vec<f64> = (-r..=r)
+        .map(|i| (-((i * i) as f64) / (2.0 * s * s)).exp())
+        .collect();
+    let n = raw.len() as i64;
+    (0..n)
+        .map(|i| {
+            let (mut acc, mut w) = (0.0, 0.0);
+            for (j, kj) in (-r..=r).zip(&k) {
+                let t = i + j;
+                if (0..n).contains(&t) {
+                    acc += kj * raw[t as usize] as f64;
+                    w += kj;
+                }
+            }
+            (acc / w) as f32
+        })
+        .collect()
 }
 
 /// [`tip_crossing`] in a window that clears the blurred end on both sides,
