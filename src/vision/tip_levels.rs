@@ -20,8 +20,20 @@ pub(crate) struct Candidate {
 }
 
 /// A tip's area ratio: its coverage area over the nominal tip, or (blur
-/// comparable to the tip) its energy over the median of the four nearest
-/// other tips' (`assigned`: the pin-like tips on grid positions).
+/// comparable to the tip) measured against the four nearest other tips
+/// (`assigned`: the pin-like tips on grid positions) by two means, averaged:
+/// its energy over the median of theirs, and its coverage area over the
+/// median of theirs. Each is biased where the other is not. The energy is
+/// taken against the housing's level, so the clearance hole around a tip
+/// (darker than the housing on a bright part, brighter on a dark one) counts
+/// against it by the part of the hole the tip leaves bare inside the disc:
+/// a tip off-centre in its hole, or a bent one, reads larger than its
+/// neighbours (1.6–1.9 ×), a small tip far smaller (even negative), and
+/// where the background estimate is off by a few DN a good small tip reads
+/// 0.6 ×. The half-level coverage, taken against the level beside the tip
+/// (hole or housing), has no such bias; blur grows it, but alike for every
+/// tip of the part, so against the neighbours' it stays near the area
+/// ratio (within 0.1–0.3 of it for intact, bent and damaged tips alike).
 pub(crate) fn area_ratio_of(
     cands: &[Candidate],
     assigned: &[usize],
@@ -34,24 +46,71 @@ pub(crate) fn area_ratio_of(
     if !blurred {
         return abs;
     }
-    let mut d: Vec<(f64, f64)> = assigned
+    let mut d: Vec<(f64, (f64, f64))> = assigned
         .iter()
         .filter(|&&o| o != ci)
         .map(|&o| {
             let q = &cands[o].m;
-            ((q.x - m.x).hypot(q.y - m.y), q.energy)
+            ((q.x - m.x).hypot(q.y - m.y), (q.energy, q.area_px))
         })
         .collect();
     if d.len() < 2 {
         return abs;
     }
     d.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut e: Vec<f64> = d.iter().take(4).map(|p| p.1).collect();
-    match grid::median(&mut e) {
-        Some(med) if med > 0.0 => m.energy / med,
+    let mut e: Vec<f64> = d.iter().take(4).map(|p| p.1.0).collect();
+    let mut c: Vec<f64> = d.iter().take(4).map(|p| p.1.1).collect();
+    match (grid::median(&mut e), grid::median(&mut c)) {
+        (Some(me), Some(mc)) if me > 0.0 && mc > 0.0 => 0.5 * (m.energy / me + m.area_px / mc),
+        (Some(me), _) if me > 0.0 => m.energy / me,
         _ => abs,
     }
 }
+
+/// A blob the second look finds on an empty grid position, under the
+/// tip-bright level ([`MIN_TIP_CONTRAST`]), is still the pin's tip — a
+/// damaged one, smaller than the intact tips and flat where they are domed,
+/// whose peak blur lowers — when it is what only a tip can be there: a
+/// missing pin leaves its clearance hole, which stands on the far side of
+/// the housing from the tips (darker on a bright part, brighter on a dark
+/// one), so nothing tip-ward sits on the position. It must lie on the
+/// position (`d_pin`, its distance in tip widths, at most
+/// [`DIM_TIP_ON_POSITION`]: a damaged tip's area centroid stays within its
+/// own outline), be compact (`elongation` under [`DIM_TIP_MAX_ELONGATION`]),
+/// reach [`DIM_TIP_MIN_LEVEL`] of the local tip level, stand
+/// [`DIM_TIP_MIN_SNR`] σ over the noise, and be filled (`core`, its disc
+/// mean at its centre, at least half its level: a ring, such as a hole's
+/// rim, has a low core).
+pub(crate) fn dim_tip_on_position(
+    rho: f64,
+    core: Option<f64>,
+    snr: f64,
+    d_pin: f64,
+    elongation: f64,
+) -> bool {
+    rho >= DIM_TIP_MIN_LEVEL
+        && core.is_some_and(|c| c >= 0.5 * rho)
+        && snr >= DIM_TIP_MIN_SNR
+        && d_pin <= DIM_TIP_ON_POSITION
+        && elongation < DIM_TIP_MAX_ELONGATION
+}
+
+/// [`dim_tip_on_position`]: the least level, a fraction of the local tip
+/// level (a tip of a third of the area, flat and blurred, reads 0.25–0.5).
+pub(crate) const DIM_TIP_MIN_LEVEL: f64 = 0.2;
+/// ... the least contrast over the noise, summed over its mask (twice a
+/// tip-bright blob's, [`MIN_SNR`]).
+pub(crate) const DIM_TIP_MIN_SNR: f64 = 2.0 * MIN_SNR;
+/// ... the farthest from the position, in tip widths.
+pub(crate) const DIM_TIP_ON_POSITION: f64 = 0.5;
+/// ... the most elongated.
+pub(crate) const DIM_TIP_MAX_ELONGATION: f64 = 2.0;
+
+/// A blob assigned to a position that is not tip-like (area, elongation)
+/// and lies more than this many tip widths from it is outside the tip's
+/// clearance hole (≈ 0.6–0.7 tip widths in radius): not the pin, which
+/// reads missing.
+pub(crate) const OFF_HOLE: f64 = 0.75;
 
 /// Blur (edge σ) beyond this fraction of the tip width: tip areas are
 /// judged against the neighbouring tips' energy.

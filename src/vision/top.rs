@@ -18,8 +18,8 @@ use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
-    BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, area_ratio_of,
-    contrast_ratio, snr_of, tip_disc_radius,
+    BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, area_ratio_of,
+    contrast_ratio, core_contrast, dim_tip_on_position, snr_of, tip_disc_radius,
 };
 use super::top_candidates::{faint_tips_to_add, measure_blobs, measure_candidates};
 
@@ -556,6 +556,7 @@ pub fn inspect_top<P: Px>(
     // contrast: a dim tip the coarse threshold missed (a dark corner, low
     // gain) is found here; what is there otherwise is said in the reason.
     let mut empty_look: Vec<Option<(f64, f64)>> = vec![None; positions.len()];
+    let mut dim_tip = vec![false; positions.len()];
     for pi in 0..positions.len() {
         if pos_cand[pi].is_some() {
             continue;
@@ -596,12 +597,27 @@ pub fn inspect_top<P: Px>(
         let snr = snr_of(&m);
         let d = (m.x - nx).hypot(m.y - ny);
         empty_look[pi] = Some((rho, snr));
-        if rho >= MIN_TIP_CONTRAST
+        let tip_bright = rho >= MIN_TIP_CONTRAST
             && snr >= MIN_SNR
             && d < r_assign
             && !m.touches_border
+            && m.area_px / tip_px >= 0.15;
+        // A damaged tip smaller than the intact ones (and without their
+        // dome) peaks under the tip-bright level once blurred; where a
+        // missing pin leaves only its clearance hole, a compact blob on
+        // the position with a tip-like core is that tip (`dim_tip_on_position`).
+        let dim = !tip_bright
+            && !m.touches_border
             && m.area_px / tip_px >= 0.15
-        {
+            && dim_tip_on_position(
+                rho,
+                core_contrast(plane, sign, (m.x, m.y), 0.15 * tip_px, t_exp, b_exp),
+                snr,
+                d / pin_px,
+                m.elongation,
+            );
+        if tip_bright || dim {
+            dim_tip[pi] = dim;
             let pinlike = m.elongation < 3.0;
             cands.push(Candidate {
                 m,
@@ -619,7 +635,22 @@ pub fn inspect_top<P: Px>(
     for (pi, &(row, col)) in positions.iter().enumerate() {
         let (nx, ny) = nominal[pi];
         let mut pr = PinResult::missing(row, col, (nx, ny));
-        if let Some(ci) = pos_cand[pi] {
+        // A blob that is not tip-like and lies outside the tip's clearance
+        // hole is a piece of the housing's edge or chamfer band by an empty
+        // position, not this pin (a bent tip is intact, so tip-like).
+        let off_hole = |ci: usize| {
+            let m = &cands[ci].m;
+            !cands[ci].pinlike && (m.x - nx).hypot(m.y - ny) > OFF_HOLE * pin_px
+        };
+        if let Some(ci) = pos_cand[pi].filter(|&ci| off_hole(ci)) {
+            let m = &cands[ci].m;
+            pr.reason = Some(format!(
+                "no tip at the position: the nearest blob, {:.2} tip widths away, is not tip-like (area {:.2} × nominal, elongation {:.1}) and lies outside the tip's clearance hole",
+                (m.x - nx).hypot(m.y - ny) / pin_px,
+                m.area_px / tip_px,
+                m.elongation
+            ));
+        } else if let Some(ci) = pos_cand[pi] {
             let m = &cands[ci].m;
             let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);
             let (du, dv) = (du * mm_per_px, dv * mm_per_px);
@@ -637,10 +668,15 @@ pub fn inspect_top<P: Px>(
                 .map(|(t, b)| contrast_ratio(m.hi, t, b));
             pr.status = if ar < ta_lo || ar > ta_hi {
                 pr.reason = Some(format!(
-                    "tip area {ar:.2} × nominal, outside tip_area [{ta_lo}, {ta_hi}]{}",
+                    "tip area {ar:.2} × nominal, outside tip_area [{ta_lo}, {ta_hi}]{}{}",
                     pr.contrast_ratio
                         .map(|r| format!("; level {r:.2} of the local tip level"))
-                        .unwrap_or_default()
+                        .unwrap_or_default(),
+                    if dim_tip[pi] {
+                        " (a dim tip on its position, found by the second look)"
+                    } else {
+                        ""
+                    }
                 ));
                 PinStatus::Damaged
             } else if off > tol.position_mm {
