@@ -115,28 +115,14 @@ const MAX_MEDIAN_PX: f64 = 0.075;
 /// held-out images it fixed (docs/vision.md, "Estimated scale").
 #[test]
 fn large_tips_are_scaled_by_their_own_lattice() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = std::env::temp_dir().join(format!("pinsight-pyscale-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     for seed in [600_123u64, 920_025] {
-        let st = Command::new("python3")
-            .arg(root.join("tests/python/connector_render.py"))
-            .arg(&dir)
-            .arg(seed.to_string())
-            .arg("1")
-            .status()
-            .expect("python3 with numpy, opencv-python-headless and Pillow");
-        assert!(st.success(), "the Python renderer failed");
-        let j = dir.join(format!("py-{seed:06}.json"));
-        let text = std::fs::read_to_string(&j).expect("truth");
-        let t = truth::Truth::from_json(&text).expect("truth");
-        let v: serde_json::Value = serde_json::from_str(&text).expect("json");
-        let recipe = Recipe::load(&dir.join(&t.recipe)).expect("recipe");
+        let (recipe, t, v, img) = render_seed(&dir, seed);
         assert!(
             recipe.mm_per_px.is_none(),
             "{seed}: the scale is to be found"
         );
-        let img = dir.join(v["image"].as_str().expect("image name"));
         let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
             .unwrap_or_else(|e| panic!("{seed}: {e}"));
         // A sub-harmonic lock is 70–80 % off; with 6 pins, each up to 0.8 of
@@ -165,23 +151,10 @@ fn large_tips_are_scaled_by_their_own_lattice() {
 /// renderer's truth.
 #[test]
 fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = std::env::temp_dir().join(format!("pinsight-pyband-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let seed = 590_370u64;
-    let st = Command::new("python3")
-        .arg(root.join("tests/python/connector_render.py"))
-        .arg(&dir)
-        .arg(seed.to_string())
-        .arg("1")
-        .status()
-        .expect("python3 with numpy, opencv-python-headless and Pillow");
-    assert!(st.success(), "the Python renderer failed");
-    let text = std::fs::read_to_string(dir.join(format!("py-{seed:06}.json"))).expect("truth");
-    let t = truth::Truth::from_json(&text).expect("truth");
-    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
-    let recipe = Recipe::load(&dir.join(&t.recipe)).expect("recipe");
-    let img = dir.join(v["image"].as_str().expect("image name"));
+    let (recipe, t, v, img) = render_seed(&dir, seed);
     let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
         .unwrap_or_else(|e| panic!("{seed}: {e}"));
     let c = truth::compare(&ins, &t, 15.0);
@@ -194,4 +167,24 @@ fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
         ins.grid.mm_per_px
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Renders one seed with the Python renderer into `dir`: its recipe, truth,
+/// truth as JSON and image path.
+fn render_seed(dir: &Path, seed: u64) -> (Recipe, truth::Truth, serde_json::Value, PathBuf) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let st = Command::new("python3")
+        .arg(root.join("tests/python/connector_render.py"))
+        .arg(dir)
+        .arg(seed.to_string())
+        .arg("1")
+        .status()
+        .expect("python3 with numpy, opencv-python-headless and Pillow");
+    assert!(st.success(), "the Python renderer failed");
+    let text = std::fs::read_to_string(dir.join(format!("py-{seed:06}.json"))).expect("truth");
+    let t = truth::Truth::from_json(&text).expect("truth");
+    let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let recipe = Recipe::load(&dir.join(&t.recipe)).expect("recipe");
+    let img = dir.join(v["image"].as_str().expect("image name"));
+    (recipe, t, v, img)
 }

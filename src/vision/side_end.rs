@@ -89,9 +89,16 @@ fn model(ds: &[f64], ys: &[f64], apex: f64, hw: f64, rho: f64, sigma: f64, out: 
     out.extend(vals);
 }
 
-/// Sum of squared residuals of the model against `data` (same layout as
-/// [`model`]), its amplitude solved in closed form.
-fn sse(data: &[f64], ds: &[f64], ys: &[f64], p: [f64; 3], rho_f: f64, buf: &mut Vec<f64>) -> f64 {
+/// Residuals of the model against `data` (same layout as [`model`]), its
+/// amplitude solved in closed form.
+fn residuals(
+    data: &[f64],
+    ds: &[f64],
+    ys: &[f64],
+    p: [f64; 3],
+    rho_f: f64,
+    buf: &mut Vec<f64>,
+) -> Vec<f64> {
     let [apex, sigma, hw] = p;
     model(ds, ys, apex, hw, rho_f * hw, sigma, buf);
     let (mut mm, mut dm) = (0.0, 0.0);
@@ -100,9 +107,14 @@ fn sse(data: &[f64], ds: &[f64], ys: &[f64], p: [f64; 3], rho_f: f64, buf: &mut 
         dm += m * d;
     }
     let amp = if mm > 0.0 { dm / mm } else { 1.0 };
-    buf.iter()
-        .zip(data)
-        .map(|(m, d)| (d - amp * m).powi(2))
+    buf.iter().zip(data).map(|(m, d)| d - amp * m).collect()
+}
+
+/// Sum of squared [`residuals`].
+fn sse(data: &[f64], ds: &[f64], ys: &[f64], p: [f64; 3], rho_f: f64, buf: &mut Vec<f64>) -> f64 {
+    residuals(data, ds, ys, p, rho_f, buf)
+        .iter()
+        .map(|r| r * r)
         .sum()
 }
 
@@ -116,17 +128,7 @@ fn fit_one(data: &[f64], ds: &[f64], ys: &[f64], p0: [f64; 3], rho_f: f64) -> (f
     let h = [0.02, 0.02, 0.02];
     for _ in 0..25 {
         // Residual Jacobian by finite differences.
-        let resid = |q: [f64; 3], buf: &mut Vec<f64>| -> Vec<f64> {
-            let [apex, sigma, hw] = q;
-            model(ds, ys, apex, hw, rho_f * hw, sigma, buf);
-            let (mut mm, mut dm) = (0.0, 0.0);
-            for (m, d) in buf.iter().zip(data) {
-                mm += m * m;
-                dm += m * d;
-            }
-            let amp = if mm > 0.0 { dm / mm } else { 1.0 };
-            buf.iter().zip(data).map(|(m, d)| d - amp * m).collect()
-        };
+        let resid = |q: [f64; 3], buf: &mut Vec<f64>| residuals(data, ds, ys, q, rho_f, buf);
         let r0 = resid(p, &mut buf);
         let mut jac = [vec![], vec![], vec![]];
         for a in 0..3 {

@@ -18,8 +18,8 @@ fn recipe(rows: u32, cols: u32, scale_known: bool) -> Recipe {
     .unwrap()
 }
 
-/// Statuses found and true, row-major.
-fn statuses(sc: &Scene) -> (Vec<PinStatus>, Vec<PinStatus>) {
+/// The scene rendered and inspected, with its truth.
+fn inspect_scene(sc: &Scene) -> (super::super::Inspection, truth::Truth) {
     let (g, t) = sc.render();
     let ins = inspect_gray(
         &sc.recipe,
@@ -28,6 +28,12 @@ fn statuses(sc: &Scene) -> (Vec<PinStatus>, Vec<PinStatus>) {
         &InspectOptions::default(),
     )
     .unwrap();
+    (ins, t)
+}
+
+/// Statuses found and true, row-major.
+fn statuses(sc: &Scene) -> (Vec<PinStatus>, Vec<PinStatus>) {
+    let (ins, t) = inspect_scene(sc);
     let c = truth::compare(&ins, &t, 15.0);
     assert!(c.extras_spurious == 0, "{:?}", ins.extras);
     (
@@ -111,14 +117,7 @@ fn a_small_blurred_damaged_tip_is_damaged_not_missing() {
         sc.centre_px.0 += 0.37 * i as f64;
         sc.pins[2].damage = Damage::Scaled(scale);
         sc.pins[4].present = false;
-        let (g, t) = sc.render();
-        let ins = inspect_gray(
-            &sc.recipe,
-            &g,
-            Default::default(),
-            &InspectOptions::default(),
-        )
-        .unwrap();
+        let (ins, t) = inspect_scene(&sc);
         let found: Vec<PinStatus> = ins.pins.iter().map(|p| p.status).collect();
         let truth: Vec<PinStatus> = t.pins.iter().map(|p| p.defect).collect();
         assert_eq!(truth[2], PinStatus::Damaged);
