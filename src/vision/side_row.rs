@@ -95,16 +95,29 @@ pub(super) fn bar_edges(prof: &[f32]) -> Option<(f64, f64)> {
     let (bl, br) = (median_f32(&mut left), median_f32(&mut right));
     let half_l = 0.5 * (bl + level_in);
     let half_r = 0.5 * (br + level_in);
+    // The steepest point of a linear ramp (a pillbox blur spreads an edge
+    // evenly over several px) is wherever the noise puts it, often low on
+    // the flank, and two samples inside it may still lie under the half
+    // level; the crossing is searched from the first sample at or over
+    // the half level on the interior's side (py 580 327, 590 085: end pins
+    // read missing for a profile whose edges were plain).
+    let start_l = (l0 + 2..=im.max(l0 + 2))
+        .find(|&i| prof[i] >= half_l)
+        .unwrap_or(l0 + 2);
+    let start_r = (im.min(r0 - 2)..=r0 - 2)
+        .rev()
+        .find(|&i| prof[i] >= half_r)
+        .unwrap_or(r0 - 2);
     // Left: last rise through half_l before the interior.
     let mut xl = None;
-    for i in (1..=l0 + 2).rev() {
+    for i in (1..=start_l).rev() {
         if prof[i - 1] < half_l && prof[i] >= half_l {
             xl = Some((i - 1) as f64 + ((half_l - prof[i - 1]) / (prof[i] - prof[i - 1])) as f64);
             break;
         }
     }
     let mut xr = None;
-    for i in r0 - 2..n - 1 {
+    for i in start_r..n - 1 {
         if prof[i] >= half_r && prof[i + 1] < half_r {
             xr = Some(i as f64 + ((prof[i] - half_r) / (prof[i] - prof[i + 1])) as f64);
             break;
@@ -456,6 +469,27 @@ pub(super) fn tip_crossing_recentred(
 
 #[cfg(test)]
 mod tests {
+    /// A pillbox blur makes an edge a straight ramp; noise put the
+    /// steepest point near its foot (here index 38: 30 → 6), two samples
+    /// inside which the profile is already under the half level (40 at
+    /// 36). The right edge still crosses 50 at exactly 35.0.
+    #[test]
+    fn an_edge_whose_steepest_point_is_low_on_a_ramp_is_found() {
+        let mut prof = vec![0f32; 48];
+        for v in &mut prof[20..=30] {
+            *v = 100.0;
+        }
+        for (i, v) in [90.0, 80.0, 70.0, 60.0, 50.0, 40.0, 30.0, 20.0, 6.0]
+            .into_iter()
+            .enumerate()
+        {
+            prof[31 + i] = v;
+        }
+        let (l, r) = super::bar_edges(&prof).expect("both edges");
+        assert!((l - 19.5).abs() < 1e-9, "{l}");
+        assert!((r - 35.0).abs() < 1e-9, "{r}");
+    }
+
     #[test]
     fn a_noise_spike_before_the_step_is_not_the_rise() {
         // Background 0 with a spike to 80 at index 5; the step up to 100
