@@ -75,7 +75,9 @@ pub(super) fn judge_extras<P: Px>(
         let remeasure = |floor: Option<f32>| {
             measure::measure_blob_split(plane, sign, c.roi, c.seed, localiser, dilate, floor, apart)
         };
-        let expected = levels.expected(c.m.x, c.m.y);
+        let expected = levels
+            .expected(c.m.x, c.m.y)
+            .map(|(t, b)| dimmed_levels(t, b, c.m.lo, sign));
         let (m, rho) = match expected {
             Some((t, b)) => {
                 let m = remeasure(Some(t)).unwrap_or_else(|| c.m.clone());
@@ -200,4 +202,30 @@ pub(super) fn judge_extras<P: Px>(
         }
     }
     (extras, ignored)
+}
+
+/// The tip and background levels the nearest tips establish (`t`, `b`, in
+/// `sign` space), carried to a blob whose own surround (`lo`, the median of
+/// its window's border) is darker than the tips' surround: vignetting and a
+/// gradient scale the light, so where the housing reads a fraction g of its
+/// level at the tips, a tip there would read g of its level too. Only a
+/// dark part needs it: there the dimming moves every housing structure
+/// toward the tips' (dark) level, and the housing's chamfer band in a
+/// vignetted corner read 0.57–0.87 of the tip level against the tips'
+/// levels (Rust 840 224, 840 554), 0.2–0.3 against its own place's. On a
+/// bright part dimming takes structures away from the tip level, and a
+/// surround brighter than the tips' (a bright fixture beside the housing) is
+/// no illumination to correct for, so the levels stay as they are.
+pub(super) fn dimmed_levels(t: f32, b: f32, lo: f32, sign: f32) -> (f32, f32) {
+    if sign >= 0.0 || b >= 0.0 || lo >= 0.0 {
+        return (t, b);
+    }
+    // In sign space a dark part's levels are negative: g = lo / b is the
+    // ratio of the real (positive) levels.
+    let g = lo / b;
+    if g < 1.0 && g > 0.0 {
+        (t * g, b * g)
+    } else {
+        (t, b)
+    }
 }
