@@ -50,6 +50,7 @@ pub mod recipe;
 pub mod report;
 pub mod result;
 pub mod scale;
+mod scale_one_tip;
 pub mod side;
 mod side_bar;
 mod side_edge;
@@ -120,7 +121,7 @@ fn dispatch<P: gray::Px>(
     opts: &InspectOptions,
 ) -> Result<Inspection, VisionError> {
     let mut ins = match recipe.view {
-        View::Top => top::inspect_top(recipe, p, info, full_scale, opts),
+        View::Top => scale_one_tip::inspect_top(recipe, p, info, full_scale, opts),
         View::Side => side::inspect_side(recipe, p, info, full_scale, opts),
     }?;
     ins.warnings.extend(envelope::notes(&ins));

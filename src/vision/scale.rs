@@ -75,9 +75,9 @@ const PEAK_SHARE: f64 = 0.35;
 const DONE_PEAK: f64 = 0.03;
 
 /// Smallest tip width tried, px.
-const W_MIN: f64 = 3.5;
+pub(super) const W_MIN: f64 = 3.5;
 
-fn width_of_area(a: f64, shape: PinShape) -> f64 {
+pub(super) fn width_of_area(a: f64, shape: PinShape) -> f64 {
     match shape {
         PinShape::Square => a.sqrt(),
         PinShape::Round => (4.0 * a / std::f64::consts::PI).sqrt(),
@@ -98,7 +98,7 @@ fn touches_frame(b: &super::label::Blob, coarse: &Coarse) -> bool {
 
 /// A tip-sized blob of the coarse search: centre, width, top-hat peak and
 /// bounding box (full px).
-type TipBlob = (f64, f64, f64, f64, [f64; 4]);
+pub(super) type TipBlob = (f64, f64, f64, f64, [f64; 4]);
 
 #[cfg(test)]
 fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64, mult: f64) -> Candidate {
@@ -112,7 +112,12 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64, mult: f64) -> Candi
 
 /// The coarse search at tip width `w` (smoothing box of `smoothing`): the
 /// blobs of about a tip's area not touching the frame.
-fn tip_blobs(recipe: &Recipe, coarse: &Coarse, w: f64, smoothing: Smoothing) -> Vec<TipBlob> {
+pub(super) fn tip_blobs(
+    recipe: &Recipe,
+    coarse: &Coarse,
+    w: f64,
+    smoothing: Smoothing,
+) -> Vec<TipBlob> {
     let found = detect::search_coarse_smoothed(coarse, w, None, None, smoothing);
     let k = coarse.k as f64;
     let tip_area = match recipe.pin_shape {

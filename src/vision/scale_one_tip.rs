@@ -1,0 +1,118 @@
+//! The scale from one tip's own width, the last resort when the recipe has
+//! no `mm_per_px` and the pins' lattice gives no scale the inspection can
+//! use (fewer than two intact tips are present: a 1 × 3 part with two pins
+//! missing, a 1 × 4 with one good tip and one damaged).
+//!
+//! The lattice search ([`super::scale`]) needs two tips a pitch apart.
+//! With one tip there is no pitch, but the recipe gives the tip's size in
+//! mm (`pin_mm`), which the spec promises and both renderers draw: a whole
+//! tip measured at full resolution gives the scale directly. The
+//! housing's size is not used: the Rust generator and the Python renderer
+//! size it differently (the spec only says the grid is centred on it).
+//!
+//! Which blob is the tip: over the same ladder of tip widths as the lattice
+//! search, the tip-sized blobs of the coarse search; a tip stands highest
+//! in the top-hat at about its own width (a larger box spreads it, a
+//! smaller opening keeps only its rim), and the tips are the scene's
+//! strongest blobs, so the strongest blob over the ladder is taken, then
+//! measured at full resolution as the inspection measures a tip. It must be
+//! whole in its window, not elongated, and of 0.5–2 × the area the width
+//! it was found at implies; its measured area then gives the width.
+
+use super::detect::{self, Smoothing};
+use super::gray::{Coarse, Plane, Px};
+use super::measure::{self, Localiser, Roi};
+use super::recipe::{PinShape, Recipe};
+use super::scale::{TipBlob, W_MIN, tip_blobs, width_of_area};
+
+/// How many of the strongest blobs over the ladder are measured before
+/// giving up (a glint or a speck of debris may stand above the tip).
+const MAX_TRIED: usize = 4;
+
+/// The tip width in px from the one strongest whole tip, or `None` when no
+/// blob measures as a whole tip.
+pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> Option<f64> {
+    let (wd, ht) = (plane.w as f64, plane.h as f64);
+    let w_max = (wd.min(ht) / 3.0).max(W_MIN);
+    let mut cache: Vec<Option<Coarse>> = vec![None; 9];
+    // (width tried, blob), the strongest blob at each width.
+    let mut best: Vec<(f64, TipBlob)> = Vec::new();
+    let mut w = w_max;
+    while w >= W_MIN {
+        let k = detect::coarse_factor(w);
+        if cache[k].is_none() {
+            cache[k] = Some(Coarse::build(plane, k, sign));
+        }
+        let coarse = cache[k].as_ref()?;
+        if let Some(b) = tip_blobs(recipe, coarse, w, Smoothing::Normal)
+            .into_iter()
+            .max_by(|a, b| a.3.total_cmp(&b.3))
+        {
+            best.push((w, b));
+        }
+        w /= 1.2;
+    }
+    best.sort_by(|a, b| b.1.3.total_cmp(&a.1.3));
+    let tip_area = |w: f64| match recipe.pin_shape {
+        PinShape::Square => w * w,
+        PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
+    };
+    let mut seen: Vec<(f64, f64)> = Vec::new();
+    for (w, (x, y, _, _, bx)) in best {
+        // The same blob found at the next width is not a second try.
+        if seen.iter().any(|p| (p.0 - x).hypot(p.1 - y) < 0.5 * w) {
+            continue;
+        }
+        if seen.len() == MAX_TRIED {
+            break;
+        }
+        seen.push((x, y));
+        let (margin, dilate) = measure::tip_window(w);
+        let roi = Roi::around(bx[0], bx[1], bx[2], bx[3], margin, plane.w, plane.h);
+        let Some(m) =
+            measure::measure_blob(plane, sign, roi, (x, y), Localiser::default(), dilate, None)
+        else {
+            continue;
+        };
+        let r = m.area_px / tip_area(w);
+        if !m.touches_border && m.elongation < 3.0 && (0.5..=2.0).contains(&r) {
+            return Some(width_of_area(m.area_px, recipe.pin_shape));
+        }
+    }
+    None
+}
+
+/// The top view's inspection ([`super::top::inspect_top`]), and when it
+/// finds no pins at an estimated scale, once more at the scale one whole
+/// tip gives ([`tip_width`]); the result then says the scale was estimated
+/// and from what. Any other outcome stands: an image judged before is
+/// judged the same.
+pub(super) fn inspect_top<P: Px>(
+    recipe: &Recipe,
+    plane: &Plane<P>,
+    info: super::gray::ImageInfo,
+    full_scale: f32,
+    opts: &super::InspectOptions,
+) -> Result<super::result::Inspection, super::error::VisionError> {
+    let first = super::top::inspect_top(recipe, plane, info.clone(), full_scale, opts);
+    if recipe.mm_per_px.is_some() || !matches!(first, Err(super::error::VisionError::NoPins { .. }))
+    {
+        return first;
+    }
+    let Some(w) = tip_width(plane, recipe.polarity.sign(), recipe) else {
+        return first;
+    };
+    let mut one = recipe.clone();
+    let mm_per_px = recipe.pin_mm / w;
+    one.mm_per_px = Some(mm_per_px);
+    match super::top::inspect_top(&one, plane, info, full_scale, opts) {
+        Ok(mut ins) => {
+            ins.grid.mm_per_px_estimated = true;
+            ins.warnings.push(format!(
+                "no lattice of tips gives the scale: mm_per_px estimated from one tip's width ({w:.1} px): {mm_per_px:.5}"
+            ));
+            Ok(ins)
+        }
+        Err(_) => first,
+    }
+}

@@ -1,0 +1,65 @@
+//! Top views with fewer than two intact tips and no `mm_per_px` in the
+//! recipe (`vision::scale_one_tip`): the pins' lattice gives no scale, so
+//! the inspection ended as an error; one whole tip's width and the
+//! recipe's `pin_mm` must give it instead. Cases of the randomised
+//! envelope (`vision::synth_envelope`, exact truth from the generator's
+//! drawing), seeds from the tuning range, each one that ended as an error
+//! before (2026-12-02, commit cfdf3cc).
+
+use pinsight::vision::synth_envelope::EnvelopeCase;
+use pinsight::vision::{self, InspectOptions};
+
+/// Inspects one case: (verdict right, pin statuses wrong, mm_per_px found
+/// / truth).
+fn judge(seed: u64) -> (bool, usize, f64) {
+    let case = EnvelopeCase::draw(seed);
+    assert!(
+        case.recipe.mm_per_px.is_none(),
+        "{seed}: the case must leave the scale to be found"
+    );
+    let r = case.render().expect("the generator renders every draw");
+    let ins = vision::inspect_gray(
+        &case.recipe,
+        &r.gray,
+        r.info.clone(),
+        &InspectOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{seed}: an error, not a verdict: {e}"));
+    assert!(ins.grid.mm_per_px_estimated, "{seed}");
+    let c = r.compare(&case.factors, &ins);
+    (
+        c.verdict_ok,
+        c.status_mismatches.len(),
+        ins.grid.mm_per_px / case.factors.mm_per_px,
+    )
+}
+
+/// A bright 1 × 3 part with both end pins missing (840 221: 35 px tips):
+/// the one tip left is no lattice, and the search's best lattice was
+/// texture at a fifth of the tip's width, where no tip-sized blob stood.
+#[test]
+fn one_tip_of_three_gives_the_scale_by_its_width() {
+    let (ok, wrong, ratio) = judge(840_221);
+    assert!(ok, "840221: verdict wrong");
+    assert_eq!(wrong, 0, "840221: pin statuses wrong");
+    assert!(
+        (ratio - 1.0).abs() < 0.03,
+        "840221: scale {ratio:.3} × truth"
+    );
+}
+
+/// A dark 1 × 3 part with two pins missing (860 608) and a bright 1 × 4
+/// with one good tip, one damaged and two missing (860 450): a verdict,
+/// and the good tip's width gives the scale within 8 % (blur and the
+/// threshold move a tip's measured area, not its lattice).
+#[test]
+fn one_good_tip_among_missing_ones_is_a_verdict() {
+    for seed in [860_608u64, 860_450] {
+        let (ok, _wrong, ratio) = judge(seed);
+        assert!(ok, "{seed}: verdict wrong");
+        assert!(
+            (ratio - 1.0).abs() < 0.08,
+            "{seed}: scale {ratio:.3} × truth"
+        );
+    }
+}
