@@ -96,7 +96,7 @@ fn base(sub: &str, sandbox: &Path) -> Base {
             vec![p(&log)],
             vec![
                 o("revs", s("8")),
-                o("clearance-grid", s("0.1,0.3")),
+                o("clearance-grid", s("0.1,0.2,0.3")),
                 o("points", s("90")),
                 o("out", out("calibrated.toml")),
             ],
