@@ -3,21 +3,12 @@
 //! debris must not be counted as extras. Seeds from the tuning range
 //! (Rust 840 000 …), each the case that showed the fault.
 
-use pinsight::vision::synth_envelope::EnvelopeCase;
-use pinsight::vision::{self, InspectOptions};
+mod common;
 
 /// Renders and inspects one case: (verdict right, extras found, truth's
 /// extras).
 fn judge(seed: u64) -> (bool, usize, usize, Vec<String>) {
-    let case = EnvelopeCase::draw(seed);
-    let r = case.render().expect("the generator renders every draw");
-    let ins = vision::inspect_gray(
-        &case.recipe,
-        &r.gray,
-        r.info.clone(),
-        &InspectOptions::default(),
-    )
-    .unwrap_or_else(|e| panic!("{seed}: {e}"));
+    let (case, r, ins) = common::envelope_case(seed);
     let c = r.compare(&case.factors, &ins);
     let found: Vec<String> = ins
         .extras

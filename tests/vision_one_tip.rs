@@ -6,25 +6,16 @@
 //! drawing), seeds from the tuning range, each one that ended as an error
 //! before (2026-12-02, commit cfdf3cc).
 
-use pinsight::vision::synth_envelope::EnvelopeCase;
-use pinsight::vision::{self, InspectOptions};
+mod common;
 
 /// Inspects one case: (verdict right, pin statuses wrong, mm_per_px found
 /// / truth).
 fn judge(seed: u64) -> (bool, usize, f64) {
-    let case = EnvelopeCase::draw(seed);
+    let (case, r, ins) = common::envelope_case(seed);
     assert!(
         case.recipe.mm_per_px.is_none(),
         "{seed}: the case must leave the scale to be found"
     );
-    let r = case.render().expect("the generator renders every draw");
-    let ins = vision::inspect_gray(
-        &case.recipe,
-        &r.gray,
-        r.info.clone(),
-        &InspectOptions::default(),
-    )
-    .unwrap_or_else(|e| panic!("{seed}: an error, not a verdict: {e}"));
     assert!(ins.grid.mm_per_px_estimated, "{seed}");
     let c = r.compare(&case.factors, &ins);
     (

@@ -166,3 +166,26 @@ pub fn truth_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
     v.sort();
     v
 }
+
+/// One case of the randomised envelope (`vision::synth_envelope`, exact
+/// truth from the generator's drawing): drawn, rendered and inspected with
+/// the default options; an error instead of a verdict panics, naming the
+/// seed.
+pub fn envelope_case(
+    seed: u64,
+) -> (
+    pinsight::vision::synth_envelope::EnvelopeCase,
+    pinsight::vision::synth_envelope::Rendered,
+    pinsight::vision::Inspection,
+) {
+    let case = pinsight::vision::synth_envelope::EnvelopeCase::draw(seed);
+    let r = case.render().expect("the generator renders every draw");
+    let ins = pinsight::vision::inspect_gray(
+        &case.recipe,
+        &r.gray,
+        r.info.clone(),
+        &pinsight::vision::InspectOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{seed}: an error, not a verdict: {e}"));
+    (case, r, ins)
+}
