@@ -84,6 +84,14 @@ pub(super) fn width_of_area(a: f64, shape: PinShape) -> f64 {
     }
 }
 
+/// The area (px²) of a tip `w` px wide: [`width_of_area`]'s inverse.
+pub(super) fn area_of_width(w: f64, shape: PinShape) -> f64 {
+    match shape {
+        PinShape::Square => w * w,
+        PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
+    }
+}
+
 /// A blob touching the frame's edge is no whole tip (the part lies inside
 /// the frame), and the top-hat leaves a ridge along an edge the image
 /// rises towards (vignetting in a dark-polarity image, a gradient): noise
@@ -120,10 +128,7 @@ pub(super) fn tip_blobs(
 ) -> Vec<TipBlob> {
     let found = detect::search_coarse_smoothed(coarse, w, None, None, smoothing);
     let k = coarse.k as f64;
-    let tip_area = match recipe.pin_shape {
-        PinShape::Square => w * w,
-        PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
-    };
+    let tip_area = area_of_width(w, recipe.pin_shape);
     found
         .blobs
         .iter()

@@ -22,8 +22,8 @@
 use super::detect::{self, Smoothing};
 use super::gray::{Coarse, Plane, Px};
 use super::measure::{self, Localiser, Roi};
-use super::recipe::{PinShape, Recipe};
-use super::scale::{TipBlob, W_MIN, tip_blobs, width_of_area};
+use super::recipe::Recipe;
+use super::scale::{TipBlob, W_MIN, area_of_width, tip_blobs, width_of_area};
 
 /// How many of the strongest blobs over the ladder are measured before
 /// giving up (a glint or a speck of debris may stand above the tip).
@@ -53,10 +53,6 @@ pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> 
         w /= 1.2;
     }
     best.sort_by(|a, b| b.1.3.total_cmp(&a.1.3));
-    let tip_area = |w: f64| match recipe.pin_shape {
-        PinShape::Square => w * w,
-        PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
-    };
     let mut seen: Vec<(f64, f64)> = Vec::new();
     for (w, (x, y, _, _, bx)) in best {
         // The same blob found at the next width is not a second try.
@@ -74,7 +70,7 @@ pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> 
         else {
             continue;
         };
-        let r = m.area_px / tip_area(w);
+        let r = m.area_px / area_of_width(w, recipe.pin_shape);
         if !m.touches_border && m.elongation < 3.0 && (0.5..=2.0).contains(&r) {
             return Some(width_of_area(m.area_px, recipe.pin_shape));
         }
