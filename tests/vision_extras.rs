@@ -49,3 +49,36 @@ fn a_dark_parts_chamfer_band_in_a_vignetted_corner_is_no_debris() {
         assert!(ok, "{seed}");
     }
 }
+
+/// Debris across the housing's edge where the fixture beside it is nearly
+/// as bright as the debris itself: its half-level mask runs into the
+/// fixture (870 327: "part of a larger structure"), or, cut at the saddle,
+/// it stands 0.05 of the tip contrast above the fixture (840 297: "a
+/// ripple of that structure") or 3.3 σ above the noise (830 510). Its
+/// protrusion into the housing, which no straight edge, corner or band
+/// makes, is 0.4–0.5 of a tip and 0.4–0.5 of the tip contrast high: an
+/// extra, found where the generator drew it.
+#[test]
+fn debris_across_the_housing_edge_beside_a_bright_fixture_is_found() {
+    for seed in [840_297u64, 830_510, 870_327] {
+        let (case, r, ins) = common::envelope_case(seed);
+        let c = r.compare(&case.factors, &ins);
+        assert_eq!(r.truth.extras.len(), 1, "{seed}: the generator drew one");
+        let t = &r.truth.extras[0];
+        let tol = (0.5 * case.factors.tip_px).max(8.0);
+        let near: Vec<_> = ins
+            .extras
+            .iter()
+            .filter(|e| (e.x_px - t.x_px).hypot(e.y_px - t.y_px) <= tol)
+            .collect();
+        assert_eq!(
+            (ins.extras.len(), near.len()),
+            (1, 1),
+            "{seed}: truth ({:.0}, {:.0}), found {:?}",
+            t.x_px,
+            t.y_px,
+            ins.extras
+        );
+        assert!(c.verdict_ok, "{seed}");
+    }
+}

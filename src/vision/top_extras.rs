@@ -14,6 +14,7 @@ use super::tip_levels::{
     CORE_SIGMAS, Candidate, LocalLevels, MIN_LOCAL_CONTRAST, MIN_PROMINENCE, MIN_SNR,
     MIN_TIP_CONTRAST, contrast_ratio, core_contrast, core_sigma, local_contrast, snr_of,
 };
+use super::top_shoulder::{Shoulder, measure_shoulder};
 
 /// Where the top view stands when it judges the blobs left over.
 pub(super) struct Leftovers<'a, P: Px> {
@@ -127,7 +128,45 @@ pub(super) fn judge_extras<P: Px>(
             ),
             None => (0.0, 1.0),
         };
-        if ar < rule.min_area_ratio {
+        // Debris across the housing's edge that the structure beside it
+        // (as bright as the debris) swallows: measured as its protrusion
+        // into the housing (`top_shoulder`), and counted when that alone
+        // is a tip-bright blob clear of noise.
+        let shoulder = match expected {
+            Some((t, b))
+                if m.touches_border || (cut && (prominence < MIN_PROMINENCE || snr < MIN_SNR)) =>
+            {
+                shoulder_extra(lo, c.seed, t, b, core_px)
+            }
+            _ => None,
+        };
+        if let Some((sh, rise, level)) = shoulder.filter(|s| {
+            let (u, v) = sim.inverse(s.0.x, s.0.y);
+            // Two coarse blobs on one piece of debris find one protrusion.
+            let new = extras.iter().all(|e: &ExtraResult| {
+                (e.x_px - s.0.x).hypot(e.y_px - s.0.y) > 0.5 * tip_px.sqrt()
+            });
+            new && rect_distance(u, v, rect) <= max_dist
+                && s.0.area_px / tip_px >= rule.min_area_ratio
+        }) {
+            let (u, v) = sim.inverse(sh.x, sh.y);
+            let dist = rect_distance(u, v, rect);
+            let ar = sh.area_px / tip_px;
+            let snr = sh.snr();
+            extras.push(ExtraResult {
+                x_px: sh.x,
+                y_px: sh.y,
+                area_ratio: ar,
+                distance_mm: Some(dist),
+                ignored_because: None,
+                contrast_ratio: Some(level),
+                snr: Some(snr),
+                reason: Some(format!(
+                    "area {ar:.2} of a tip ≥ {}, level {level:.2} of the local tip level, {snr:.0} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2}); on the edge of a structure as bright as itself, measured as its protrusion from that structure's outline ({rise:.2} of the local tip contrast above it)",
+                    rule.min_area_ratio
+                )),
+            });
+        } else if ar < rule.min_area_ratio {
             if ar >= 0.5 * rule.min_area_ratio {
                 e.ignored_because = Some(format!(
                     "area {ar:.2} of a tip (in tip-bright units), below {}",
@@ -202,6 +241,44 @@ pub(super) fn judge_extras<P: Px>(
         }
     }
     (extras, ignored)
+}
+
+/// A blob set aside as part of, or a ripple of, a brighter structure,
+/// measured again as its protrusion from that structure's outline
+/// (`top_shoulder`): `Some((shoulder, rise, level))`, rise and level as
+/// fractions of the local tip contrast (`t`, `b`), when the protrusion is
+/// separate (its mask clear of the window), off every pin, stands
+/// `MIN_LOCAL_CONTRAST` above the outline with its core `CORE_SIGMAS` σ
+/// above that too, reaches `MIN_TIP_CONTRAST` of the tip level, and
+/// `MIN_SNR` above the noise. Area and distance are left to the caller.
+fn shoulder_extra<P: Px>(
+    lo: &Leftovers<'_, P>,
+    seed: (f64, f64),
+    t: f32,
+    b: f32,
+    core_px: f64,
+) -> Option<(Shoulder, f64, f64)> {
+    let pin_px = (lo.tip_px * 4.0 / std::f64::consts::PI).sqrt();
+    let sh = measure_shoulder(lo.plane, lo.sign, seed, pin_px, t, core_px)?;
+    let tipc = (t - b) as f64;
+    if sh.touches_border || tipc <= 0.0 {
+        return None;
+    }
+    let on_pin = lo
+        .cands
+        .iter()
+        .zip(lo.used)
+        .any(|(c, &u)| u && (c.m.x - sh.x).hypot(c.m.y - sh.y) < 0.75 * pin_px);
+    let rise = sh.rise as f64 / tipc;
+    let level = contrast_ratio(sh.base + sh.rise, t, b);
+    let core_sd = sh.noise as f64 / core_px.max(1.0).sqrt() / tipc;
+    let core = sh.core as f64 / tipc;
+    (!on_pin
+        && rise >= MIN_LOCAL_CONTRAST
+        && core - CORE_SIGMAS * core_sd >= MIN_LOCAL_CONTRAST
+        && level >= MIN_TIP_CONTRAST
+        && sh.snr() >= MIN_SNR)
+        .then_some((sh, rise, level))
 }
 
 /// The tip and background levels the nearest tips establish (`t`, `b`, in
