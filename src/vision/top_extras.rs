@@ -132,9 +132,15 @@ pub(super) fn judge_extras<P: Px>(
         // (as bright as the debris) swallows: measured as its protrusion
         // into the housing (`top_shoulder`), and counted when that alone
         // is a tip-bright blob clear of noise.
+        // Bright parts only: on a dark part the housing's chamfer band is
+        // darker than the housing, a ridge whose noise clumps (Rust
+        // 870 261, vignetting 0.45) and a narrow housing narrower than the
+        // opening's square (860 498) protrude as well.
         let shoulder = match expected {
             Some((t, b))
-                if m.touches_border || (cut && (prominence < MIN_PROMINENCE || snr < MIN_SNR)) =>
+                if sign > 0.0
+                    && (m.touches_border
+                        || (cut && (prominence < MIN_PROMINENCE || snr < MIN_SNR))) =>
             {
                 shoulder_extra(lo, c.seed, t, b, core_px)
             }
@@ -264,11 +270,17 @@ fn shoulder_extra<P: Px>(
     if sh.touches_border || tipc <= 0.0 {
         return None;
     }
+    // A tip is a protrusion too: none within 0.75 tip widths of a tip a
+    // position took, nor of an intact tip the local levels were read from
+    // (a tip placed by the second look keeps no candidate: Rust 860 498).
     let on_pin = lo
         .cands
         .iter()
         .zip(lo.used)
-        .any(|(c, &u)| u && (c.m.x - sh.x).hypot(c.m.y - sh.y) < 0.75 * pin_px);
+        .filter(|&(_, &u)| u)
+        .map(|(c, _)| (c.m.x, c.m.y))
+        .chain(lo.levels.refs.iter().map(|r| (r.0, r.1)))
+        .any(|(x, y)| (x - sh.x).hypot(y - sh.y) < 0.75 * pin_px);
     let rise = sh.rise as f64 / tipc;
     let level = contrast_ratio(sh.base + sh.rise, t, b);
     let core_sd = sh.noise as f64 / core_px.max(1.0).sqrt() / tipc;
