@@ -4,7 +4,8 @@
 //! recipe's `pin_mm` must give it instead. Cases of the randomised
 //! envelope (`vision::synth_envelope`, exact truth from the generator's
 //! drawing), seeds from the tuning range, each one that ended as an error
-//! before (2026-12-02, commit cfdf3cc).
+//! before (2026-12-02, commit cfdf3cc). Also a part of three pins whose
+//! grid only the housing's outline can place (`vision::housing`).
 
 mod common;
 
@@ -53,4 +54,30 @@ fn one_good_tip_among_missing_ones_is_a_verdict() {
             "{seed}: scale {ratio:.3} × truth"
         );
     }
+}
+
+/// A bright 1 × 3 part whose middle pin is bent 1.4 tolerances along the
+/// row (840 510, `mm_per_px` given): three pins fit the grid's rotation
+/// and centre with the bend shared out, so it read ok. The housing's
+/// outline must place the grid; its edge has two steps of similar height
+/// (fixture → chamfer band → housing) under noise σ 8.6 DN, and the
+/// steepest one-pixel step per profile fell on either or on noise, so the
+/// outline was not measured (4 of 30 profiles on one line).
+#[test]
+fn a_bent_middle_pin_of_three_is_placed_by_a_two_step_housing_edge() {
+    let (case, r, ins) = common::envelope_case(840_510);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "840510: verdict wrong");
+    assert!(
+        c.status_mismatches.is_empty(),
+        "840510: pin statuses wrong: {:?}",
+        c.status_mismatches
+    );
+    assert!(
+        ins.warnings
+            .iter()
+            .any(|w| w.contains("taken from the housing's outline")),
+        "840510: the grid is not placed by the housing: {:?}",
+        ins.warnings
+    );
 }

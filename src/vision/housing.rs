@@ -103,10 +103,17 @@ impl HousingPose {
 /// ([u0, u1, v0, v1], mm) of a part whose pins span ±`field` mm. Each side
 /// is profiled across at up to 41 places along its middle (±60 % of its
 /// half length: rounded corners are symmetric and leave the slope and
-/// the centre alone), the strongest step of each profile is placed to a
-/// sub-pixel by a parabola, and a robust line through them gives the
-/// side's direction and place. `None` unless all four sides are found
-/// with most profiles on one straight edge and all four agree on the
+/// the centre alone), neighbouring profiles are averaged into 4–10
+/// segments, in each the outermost strong step (a box difference over
+/// ±3 px) is placed to a sub-pixel by a parabola, and a robust line
+/// through them gives the side's direction and place. Outermost, not
+/// steepest: a housing's edge may have two steps of similar height
+/// (fixture → chamfer band → housing), and taking the steeper one let
+/// the choice alternate along a side (Rust 840 510). `None` unless all
+/// four sides are found with most segments on one straight edge, no
+/// side has a nearly strong step beyond the chosen one in many segments
+/// (opposite sides could then take different steps and shift the
+/// centre by half the chamfer band), and all four agree on the
 /// rotation. This is a ruler independent of the pins: with two or three
 /// pins the similarity fit bends its rotation, centre and scale to any
 /// one pin's bend, the housing does not.
@@ -150,29 +157,72 @@ pub(crate) fn measure_pose<P: Px>(
         if n_s < 5 {
             return None;
         }
-        let mut pts = Vec::with_capacity(n_prof);
+        let mut profs = Vec::with_capacity(n_prof);
         for j in 0..n_prof {
             let t = c_o + 0.6 * l_half * (2.0 * j as f64 / (n_prof - 1) as f64 - 1.0);
             let prof: Vec<f64> = (0..n_s)
                 .map(|i| {
                     let q = e0 - dir * w_in + dir * i as f64 * step;
                     let mut acc = 0.0;
-                    for dt in [-1.0, 0.0, 1.0] {
+                    for dt in ACROSS_PX {
                         let tt = t + dt / s;
                         acc += if normal_u { at(q, tt) } else { at(tt, q) } as f64;
                     }
-                    acc / 3.0
+                    acc / ACROSS_PX.len() as f64
                 })
                 .collect();
             if prof.iter().any(|v| !v.is_finite()) {
                 return None;
             }
-            let g: Vec<f64> = (1..n_s - 1)
-                .map(|i| (prof[i + 1] - prof[i - 1]).abs())
-                .collect();
-            let Some((k, _)) = g.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) else {
+            profs.push((t, prof));
+        }
+        // Neighbouring profiles averaged into segments, and each segment's
+        // step strength by a box difference: one pixel's step of a faint,
+        // blurred edge was no larger than the noise.
+        let n_seg = (n_prof / PROFILES_PER_SEGMENT).clamp(4, 10);
+        let box_w = ((BOX_PX * 2.0) as usize).max(1);
+        let profs: Vec<(f64, Vec<f64>)> = (0..n_seg)
+            .map(|k| {
+                let (a, b) = (k * n_prof / n_seg, (k + 1) * n_prof / n_seg);
+                let m = (b - a) as f64;
+                let t = profs[a..b].iter().map(|p| p.0).sum::<f64>() / m;
+                let prof: Vec<f64> = (0..n_s)
+                    .map(|i| profs[a..b].iter().map(|p| p.1[i]).sum::<f64>() / m)
+                    .collect();
+                (t, box_steps(&prof, box_w))
+            })
+            .collect();
+        let n_prof = profs.len();
+        let mut gmax: Vec<f64> = profs
+            .iter()
+            .map(|(_, g)| g.iter().cloned().fold(0.0, f64::max))
+            .collect();
+        let gref = grid::median(&mut gmax).unwrap_or(0.0);
+        // The noise of a step strength: most samples lie on no step, and
+        // the median of |N(0, σ)| is 0.674 σ.
+        let mut all: Vec<f64> = profs
+            .iter()
+            .flat_map(|p| p.1.iter().copied())
+            .filter(|v| *v > 0.0)
+            .collect();
+        let sig_g = grid::median(&mut all).unwrap_or(0.0) / 0.674;
+        let strong = (STRONG_STEP * gref).max(STRONG_SIGMAS * sig_g);
+        let amb = (AMBIGUOUS_STEP * gref).max(AMBIGUOUS_SIGMAS * sig_g);
+        let mut n_amb = 0;
+        let mut pts = Vec::with_capacity(n_prof);
+        for (t, g) in &profs {
+            // The outermost strong step: the housing's outline, whether the
+            // fixture → chamfer or the chamfer → housing step is steeper.
+            let Some(k) = outermost_peak(g, strong) else {
                 continue;
             };
+            // Another step further out, past the chosen one's flank, that
+            // is nearly strong: which step is outermost is then a matter of
+            // noise and may differ between opposite sides.
+            let beyond = (k + 1..g.len()).find(|&i| g[i] < amb);
+            if beyond.is_some_and(|b| outermost_peak(&g[b..], amb).is_some()) {
+                n_amb += 1;
+            }
             let mut off = 0.0;
             if k > 0 && k + 1 < g.len() {
                 let (a, b, c) = (g[k - 1], g[k], g[k + 1]);
@@ -182,7 +232,10 @@ pub(crate) fn measure_pose<P: Px>(
                 }
             }
             let q = e0 - dir * w_in + dir * (k as f64 + 1.0 + off) * step;
-            pts.push((t, q));
+            pts.push((*t, q));
+        }
+        if 10 * n_amb > 3 * n_prof {
+            return None;
         }
         let fit = fit::robust_line(&pts, 0.75 / s)?;
         let k_in = fit.inlier.iter().filter(|b| **b).count();
@@ -216,6 +269,57 @@ pub(crate) fn measure_pose<P: Px>(
         dtheta,
         centre_mm: (cu, cv),
     })
+}
+
+/// Step strength at each sample c = k + 1 of `prof` (k = 0..len − 2): the
+/// difference of the means over `w` samples on either side, c itself left
+/// out (0 where a window leaves the profile).
+fn box_steps(prof: &[f64], w: usize) -> Vec<f64> {
+    let n = prof.len();
+    (1..n.saturating_sub(1))
+        .map(|c| {
+            if c < w || c + w >= n {
+                return 0.0;
+            }
+            let lo: f64 = prof[c - w..c].iter().sum();
+            let hi: f64 = prof[c + 1..=c + w].iter().sum();
+            (hi - lo).abs() / w as f64
+        })
+        .collect()
+}
+
+/// Offsets across a side (px) whose samples are averaged into one profile
+/// point: a housing edge is straight over a few pixels, the noise is not.
+const ACROSS_PX: [f64; 5] = [-2.0, -1.0, 0.0, 1.0, 2.0];
+
+/// Profiles averaged into one segment (4–10 segments a side).
+const PROFILES_PER_SEGMENT: usize = 4;
+
+/// Half-width of the box difference giving a step's strength, px.
+const BOX_PX: f64 = 3.0;
+
+/// A step counts as the housing's edge from this share of the side's
+/// median strongest step, and from this many σ of the step strength's
+/// noise.
+const STRONG_STEP: f64 = 0.4;
+const STRONG_SIGMAS: f64 = 3.0;
+
+/// A step further out than the chosen one makes the choice ambiguous from
+/// this share of the median strongest step and this many σ of the noise.
+const AMBIGUOUS_STEP: f64 = 0.25;
+const AMBIGUOUS_SIGMAS: f64 = 2.5;
+
+/// Index of the maximum of the outermost run of `g` at least `strong`.
+fn outermost_peak(g: &[f64], strong: f64) -> Option<usize> {
+    let mut i = (0..g.len()).rev().find(|&i| g[i] >= strong)?;
+    let mut best = i;
+    while i > 0 && g[i - 1] >= strong {
+        i -= 1;
+        if g[i] > g[best] {
+            best = i;
+        }
+    }
+    Some(best)
 }
 
 /// Distance of (u, v) from the rectangle [u0, u1] × [v0, v1] (0 inside).
