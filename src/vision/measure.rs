@@ -136,7 +136,8 @@ fn diamond_angle(dy: f32, dx: f32) -> f32 {
     }
 }
 
-fn percentile(v: &mut [f32], q: f64) -> f32 {
+/// The `q` quantile (nearest rank) of `v`, reordering it; 0 when empty.
+pub(super) fn percentile(v: &mut [f32], q: f64) -> f32 {
     if v.is_empty() {
         return 0.0;
     }

@@ -17,6 +17,7 @@
 //! window, and is not taken.
 
 use super::gray::{Plane, Px};
+use super::measure;
 use super::morph;
 
 /// What the residual of a local grey opening shows at a candidate.
@@ -90,7 +91,7 @@ pub(super) fn measure_shoulder<P: Px>(
             d.push((v[y * w + x] - v[y * w + x - 1]).abs());
         }
     }
-    let noise = median(&mut d) * 1.4826 / std::f32::consts::SQRT_2;
+    let noise = measure::percentile(&mut d, 0.5) * 1.4826 / std::f32::consts::SQRT_2;
     let vs = morph::box_mean(&v, w, h, 1);
     let open = morph::open_square(&vs, w, h, r_se);
     let r: Vec<f32> = vs.iter().zip(&open).map(|(a, b)| a - b).collect();
@@ -157,7 +158,7 @@ pub(super) fn measure_shoulder<P: Px>(
     if rest.len() < 16 {
         return None;
     }
-    let r0 = median(&mut rest);
+    let r0 = measure::percentile(&mut rest, 0.5);
     let mut n = 0usize;
     let mut sum = 0f64;
     for i in 0..w * h {
@@ -203,12 +204,4 @@ pub(super) fn measure_shoulder<P: Px>(
         mask_px: n,
         touches_border: touches,
     })
-}
-
-fn median(v: &mut [f32]) -> f32 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let k = v.len() / 2;
-    *v.select_nth_unstable_by(k, |a, b| a.total_cmp(b)).1
 }
