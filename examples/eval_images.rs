@@ -40,8 +40,10 @@ fn main() {
             .unwrap()
             .filter_map(|e| e.ok().map(|e| e.path()))
             .find(|p| {
+                // The truth (.json) and a recipe named after the image
+                // (.toml, as the Python renderer writes) share its stem.
                 p.file_stem().is_some_and(|s| s.to_string_lossy() == stem)
-                    && p.extension().is_some_and(|x| x != "json")
+                    && p.extension().is_some_and(|x| x != "json" && x != "toml")
             })
             .unwrap();
         let t0 = Instant::now();
