@@ -12,7 +12,7 @@
 //! job's input list. The merge puts the logs back in that order and builds
 //! the run with the single run's own function (`MonitorRun::from_logs`)
 //! and writes it with the single run's writer: the merged folder is the
-//! single run's, byte for byte (`tests/plant_monitor.rs`). The monitor
+//! single run's, byte for byte (`tests/plant/monitor.rs`). The monitor
 //! reports no quantiles, so no sketch is needed.
 
 use super::partial::{FileCheck, FolderFiles, Found, Header, Partial};

@@ -6,7 +6,7 @@
 //! run's writer (`sweep_folder`).
 //!
 //! The merged study is the single run's, byte for byte
-//! (`tests/plant_jobs.rs`). The wall-clock times (`wall_ms` of each case
+//! (`tests/plant/jobs.rs`). The wall-clock times (`wall_ms` of each case
 //! and of the run), which no two runs share, stay in memory for the
 //! terminal and are kept out of every file — `sweep.json`, `sweep.csv` and
 //! the partial — so a re-run of a shard writes the same bytes too.

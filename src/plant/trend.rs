@@ -6,7 +6,7 @@
 //! point and each log left out, with the log's place in the job's list.
 //!
 //! The merged folder is the single run's, byte for byte
-//! (`tests/plant_trend.rs`), except — when one log's bytes appear in two
+//! (`tests/plant/trend.rs`), except — when one log's bytes appear in two
 //! shards — the split of `calibrated` and `cached` (the shards calibrated
 //! both copies; the merge lists the later copy as the single run does and
 //! counts one calibration less). The run's wall-clock time (`wall_ms`)

@@ -12,7 +12,7 @@
 //! adds the aggregates, interleaves the items back into batch order and
 //! builds the folder with the very functions a single run uses: the
 //! merged folder is the single run's, byte for byte
-//! (`tests/plant_shard.rs`, `tests/plant_parquet.rs`).
+//! (`tests/plant/shard.rs`, `tests/plant/parquet.rs`).
 
 use super::partial::{FileCheck, FolderFiles, Found, Header, Partial};
 use crate::export::parquet::yield_tables::{

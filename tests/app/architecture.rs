@@ -343,3 +343,37 @@ fn no_file_over_800_lines_without_its_reason() {
         "these files are split now: strike them off NOT_YET_SPLIT: {done:?}"
     );
 }
+
+/// Each folder under `tests/` other than `common/` and `python/` is one test
+/// binary (`main.rs`); a file beside it that `main.rs` does not declare
+/// would never be compiled, so its tests would silently not run.
+#[test]
+fn every_test_file_in_a_test_binary_folder_is_declared() {
+    let tests = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let mut undeclared = Vec::new();
+    let mut folders = 0;
+    for e in std::fs::read_dir(&tests).unwrap().flatten() {
+        let dir = e.path();
+        let main = dir.join("main.rs");
+        if !dir.is_dir() || !main.is_file() {
+            continue;
+        }
+        folders += 1;
+        let declared = code_of(&std::fs::read_to_string(&main).unwrap());
+        for f in std::fs::read_dir(&dir).unwrap().flatten() {
+            let p = f.path();
+            let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+            if p.extension().is_some_and(|x| x == "rs")
+                && stem != "main"
+                && !declared.contains(&format!("mod {stem};"))
+            {
+                undeclared.push(p);
+            }
+        }
+    }
+    assert!(folders >= 5, "found only {folders} test-binary folders");
+    assert!(
+        undeclared.is_empty(),
+        "not declared in main.rs: {undeclared:?}"
+    );
+}

@@ -1,5 +1,5 @@
 //! Atomicity of every writer other than `yield` (which
-//! `tests/output_atomic.rs` covers in depth), through the real binary:
+//! `tests/app/output_atomic.rs` covers in depth), through the real binary:
 //! `sweep`, `overlay`, `inspect` and `methods` reports (several files),
 //! and the single files of `calibrate --out`, `simulate --csv` and
 //! `render -o`. For each: a complete run A sits in the folder with a file

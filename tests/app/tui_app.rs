@@ -4,8 +4,6 @@
 //! bad parameter file, cancelling work. Bad input shows an error in the
 //! pane; the app never quits or panics on it.
 
-mod common;
-
 use crossterm::event::{KeyCode, KeyEvent, KeyModifiers, MouseButton, MouseEvent, MouseEventKind};
 use pinsight::panes::{PaneId, Session};
 use pinsight::tui::app::{App, Msg};

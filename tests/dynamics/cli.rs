@@ -1,7 +1,7 @@
 //! The dynamics commands end to end: the real binary, its outputs and its
 //! error messages.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

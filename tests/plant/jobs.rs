@@ -7,7 +7,7 @@
 //! (`output::json`), so a shard run again writes the same bytes (tested
 //! for both).
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

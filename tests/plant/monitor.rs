@@ -7,7 +7,7 @@
 //! DuckDB read the cycles table and find monitor.json's cycles in it; a
 //! merge refuses partials of two jobs.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

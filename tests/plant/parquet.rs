@@ -12,7 +12,7 @@
 //!   wrote it, another recipe, another pinsight version, overlapping
 //!   shards.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

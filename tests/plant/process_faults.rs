@@ -11,7 +11,7 @@
 //!   (process NOK × vision fail) equals the truth file's, connector by
 //!   connector.
 
-mod common;
+use crate::common;
 
 use pinsight::process::synth::{FaultyLineConfig, LineTruth, faulty_line};
 use pinsight::rig::synth::faults::{FaultRates, InsertionFault};

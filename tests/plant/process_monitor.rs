@@ -3,7 +3,7 @@
 //! figures (`pinsight log --json`), cycles without force never OK, bad
 //! recipes named, the report files and the MCAP read back by Python.
 
-mod common;
+use crate::common;
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};

@@ -5,7 +5,7 @@
 //! `pinsight merge` of the shards' partials writes the single run's folder
 //! byte for byte (its Parquet tables included).
 
-mod common;
+use crate::common;
 
 use serde_json::Value;
 use std::collections::BTreeMap;

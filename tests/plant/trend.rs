@@ -10,9 +10,9 @@
 //! single run and every shard then share, as a plant's nightly job does:
 //! each log's calibration is one pure function of its bytes (the cache's
 //! key), so what is tested here is the sharding, the partials and the
-//! merge; the calibration's accuracy is `tests/wear_trend.rs`'s.
+//! merge; the calibration's accuracy is `tests/plant/wear_trend.rs`'s.
 
-mod common;
+use crate::common;
 
 use pinsight::rig::synth::wear_series::WearSeries;
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! `pinsight log` end to end: text, JSON, exit codes, channel maps.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -15,7 +15,7 @@
 //! it is a plain generator, so a failing input is written to
 //! `target/fuzz-failures/` to be replayed.
 
-mod common;
+use crate::common;
 use common::Rng;
 use pinsight::model::Params;
 use pinsight::progress::Progress;

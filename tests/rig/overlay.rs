@@ -5,7 +5,7 @@
 //!   generator wrote from its own inputs;
 //! - the CLI's JSON/CSV/PNG outputs, the parameter-file round trip, bad input.
 
-mod common;
+use crate::common;
 
 use pinsight::model::Params;
 use pinsight::overlay::calibrate::{CalibrateOptions, CalibrationReport, calibrate};

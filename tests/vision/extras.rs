@@ -3,7 +3,7 @@
 //! debris must not be counted as extras. Seeds from the tuning range
 //! (Rust 840 000 …), each the case that showed the fault.
 
-mod common;
+use crate::common;
 
 /// Renders and inspects one case: (verdict right, extras found, truth's
 /// extras).

@@ -3,7 +3,7 @@
 //! and extra right; centre RMS ≤ 0.15 px on the σ = 8 DN images and
 //! ≤ 0.05 px on the others.
 
-mod common;
+use crate::common;
 
 use pinsight::vision::{self, InspectOptions, PinStatus, Recipe, truth};
 use std::path::Path;

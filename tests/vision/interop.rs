@@ -7,7 +7,7 @@
 //! noise σ = 8 DN added. The measured figures are printed (run with
 //! `--nocapture`).
 
-mod common;
+use crate::common;
 
 use pinsight::vision::batch::{self, ItemStatus, RecipeBook};
 use pinsight::vision::synth::Rng;

@@ -7,7 +7,7 @@
 //! before (2026-12-02, commit cfdf3cc). Also a part of three pins whose
 //! grid only the housing's outline can place (`vision::housing`).
 
-mod common;
+use crate::common;
 
 /// Inspects one case: (verdict right, pin statuses wrong, mm_per_px found
 /// / truth).

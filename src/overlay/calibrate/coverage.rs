@@ -15,7 +15,7 @@
 //! into cycles and calibrates it as `pinsight calibrate` does. The truth is
 //! the generator's input, never read back from the log.
 //!
-//! `tests/calibration_coverage.rs` runs a reduced sweep;
+//! `tests/dynamics/calibration_coverage.rs` runs a reduced sweep;
 //! `examples/calib_coverage.rs` the full one (docs/rig-logs.md,
 //! "Calibration: bias and coverage").
 

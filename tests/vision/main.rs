@@ -1,0 +1,21 @@
+//! Integration tests — connector vision: the pipeline on our generator's
+//! images, the envelope sets of both renderers, the interop images, the CLI and
+//! bad input.
+//!
+//! One test binary per area (each module is one former test file): every
+//! integration-test binary links the whole library, so 40 binaries cost
+//! CI far more to build than to run (BENCHMARKS.md, "CI's own phases").
+//! Run one module with `cargo test --release --test vision MODULE::`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bad_input;
+mod cli;
+mod envelope;
+mod extras;
+mod fixtures;
+mod interop;
+mod one_tip;
+mod python_envelope;
+mod synth;
