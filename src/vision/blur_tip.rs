@@ -69,8 +69,8 @@ pub(crate) fn refine_centres<P: Px>(
         let Some(f) = fit_tip(plane, sign, (m.x, m.y), &prior) else {
             continue;
         };
-        // A fit far from the coverage centroid has locked onto something
-        // else (a neighbour, the housing): keep the centroid.
+        // A fit that moved off the tip has locked onto something else (a
+        // neighbour, the housing): keep the centroid.
         if !settled_on_the_same_tip((m.x, m.y), (f.x, f.y), nominal[pi], half_w) {
             continue;
         }
@@ -91,8 +91,8 @@ pub(crate) fn refine_centres<P: Px>(
 /// fit moves back towards it — mostly along the line to the hole, ending
 /// nearer the hole, by at most the tip's half-width. On small tips under
 /// strong blur (6–7 px tips, σ ≈ 1.1 px) that bias reaches 1–1.5 px, past
-/// the fixed bound, and good pins near the limit read bent (Rust 860 040,
-/// 820 669). A fit that locked onto a neighbour or the housing moves
+/// the fixed bound, and good pins near the limit read bent (Rust 860 040).
+/// A fit that locked onto a neighbour or the housing moves
 /// elsewhere or further and is refused.
 fn settled_on_the_same_tip(
     centroid: (f64, f64),
