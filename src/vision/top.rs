@@ -476,7 +476,12 @@ pub fn inspect_top<P: Px>(
             .filter_map(|(pi, c)| c.map(|ci| (pi, ci)))
             .filter(|&(_, ci)| {
                 let a = area_ratio_of(&cands, &assigned, ci, tip_px, blurred);
-                cands[ci].pinlike && a >= ta_lo && a <= ta_hi
+                // A blurred tip whose coverage blob runs into the housing's
+                // blurred light touches its window and so is not `pinlike`;
+                // its centroid is the one most pulled outward, and the
+                // model (which samples its own window about the hole) is
+                // what measures it.
+                cands[ci].m.elongation < 3.0 && a >= ta_lo && a <= ta_hi
             })
             .collect();
         super::blur_tip::refine_centres(
