@@ -278,11 +278,21 @@ fn shoulder_result<P: Px>(
     }
 }
 
+/// How far the fixture pass's debris must rise over the fixture, in the
+/// pixel noise σ (mean over its mask). A bright fixture can be as bright as
+/// the tips (Python 590 052: fixture 90.7, tips 85.8), so reaching the tip
+/// level says nothing there, and 0.25 of a low tip contrast can lie under
+/// the noise (590 052, 590 105, 590 341: contrast 0.33–0.37, noise
+/// 10–14 DN, large tips): noise and texture clumps on the fixture passed.
+/// Debris met rises 4.5 σ (Rust 840 916) to over 10 σ (Python 620 154).
+const FIXTURE_SIGMAS: f32 = 3.0;
+
 /// Debris on a bright part's fixture that never became a candidate
 /// (`top_fixture` says where to look): each place measured as a
 /// protrusion (`shoulder_extra`, the same tests as debris across the
-/// housing's edge), counted when it is new, within the distance rule and
-/// at least the rule's area.
+/// housing's edge), counted when it is new, rises `FIXTURE_SIGMAS` above
+/// the fixture's noise, lies within the distance rule and has at least the
+/// rule's area.
 fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut Vec<ExtraResult>) {
     let pin_px = (lo.tip_px * 4.0 / std::f64::consts::PI).sqrt();
     let max_dist = rule.max_distance_pitch * lo.pitch_mm;
@@ -305,6 +315,7 @@ fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut 
         };
         let (u, v) = lo.sim.inverse(sh.x, sh.y);
         if far(sh.x, sh.y)
+            && sh.rise >= FIXTURE_SIGMAS * sh.noise
             && rect_distance(u, v, lo.rect) <= max_dist
             && sh.area_px / lo.tip_px >= rule.min_area_ratio
         {
