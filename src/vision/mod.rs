@@ -63,6 +63,7 @@ pub mod top;
 mod top_candidates;
 mod top_extras;
 mod top_faint;
+mod top_fixture;
 mod top_shoulder;
 mod top_window;
 pub mod truth;

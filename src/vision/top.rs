@@ -750,6 +750,7 @@ pub fn inspect_top<P: Px>(
             cand_used.push(false);
         }
     }
+    let grown = |g: f64| [-u_half - g, u_half + g, -v_half - g, v_half + g];
     let (extras, ignored) = super::top_extras::judge_extras(
         &super::top_extras::Leftovers {
             plane,
@@ -763,6 +764,8 @@ pub fn inspect_top<P: Px>(
             sim: &sim,
             rect,
             pitch_mm: px_mm,
+            coarse: &cs,
+            grid: grown(0.4 * px_mm.min(py_mm)),
         },
         &recipe.extras,
     );

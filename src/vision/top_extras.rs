@@ -4,6 +4,7 @@
 //! from the housing). Split from `top.rs`: the judging reads every blob
 //! against the local tip levels the pins established there.
 
+use super::detect::CoarseSearch;
 use super::fit::Similarity;
 use super::gray::{Plane, Px};
 use super::housing::rect_distance;
@@ -14,6 +15,7 @@ use super::tip_levels::{
     CORE_SIGMAS, Candidate, LocalLevels, MIN_LOCAL_CONTRAST, MIN_PROMINENCE, MIN_SNR,
     MIN_TIP_CONTRAST, contrast_ratio, core_contrast, core_sigma, local_contrast, snr_of,
 };
+use super::top_fixture::fixture_seeds;
 use super::top_shoulder::{Shoulder, measure_shoulder};
 
 /// Where the top view stands when it judges the blobs left over.
@@ -32,6 +34,11 @@ pub(super) struct Leftovers<'a, P: Px> {
     /// The housing (or the grid grown by half a pitch) in the part frame, mm.
     pub rect: [f64; 4],
     pub pitch_mm: f64,
+    /// The coarse search, whose image the fixture pass reads.
+    pub coarse: &'a CoarseSearch,
+    /// The grid's extent grown by 0.4 pitch (part frame, mm): beyond it
+    /// the housing's margin and the fixture.
+    pub grid: [f64; 4],
 }
 
 /// The blobs no pin took: (extras counted, blobs set aside with why).
@@ -51,6 +58,7 @@ pub(super) fn judge_extras<P: Px>(
         sim,
         rect,
         pitch_mm: px_mm,
+        ..
     } = *lo;
     let mut extras = Vec::new();
     let mut ignored = Vec::new();
@@ -155,23 +163,7 @@ pub(super) fn judge_extras<P: Px>(
             new && rect_distance(u, v, rect) <= max_dist
                 && s.0.area_px / tip_px >= rule.min_area_ratio
         }) {
-            let (u, v) = sim.inverse(sh.x, sh.y);
-            let dist = rect_distance(u, v, rect);
-            let ar = sh.area_px / tip_px;
-            let snr = sh.snr();
-            extras.push(ExtraResult {
-                x_px: sh.x,
-                y_px: sh.y,
-                area_ratio: ar,
-                distance_mm: Some(dist),
-                ignored_because: None,
-                contrast_ratio: Some(level),
-                snr: Some(snr),
-                reason: Some(format!(
-                    "area {ar:.2} of a tip ≥ {}, level {level:.2} of the local tip level, {snr:.0} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2}); on the edge of a structure as bright as itself, measured as its protrusion from that structure's outline ({rise:.2} of the local tip contrast above it)",
-                    rule.min_area_ratio
-                )),
-            });
+            extras.push(shoulder_result(lo, rule, &sh, rise, level, FROM_OUTLINE));
         } else if ar < rule.min_area_ratio {
             if ar >= 0.5 * rule.min_area_ratio {
                 e.ignored_because = Some(format!(
@@ -246,7 +238,90 @@ pub(super) fn judge_extras<P: Px>(
             extras.push(e);
         }
     }
+    if sign > 0.0 {
+        fixture_extras(lo, rule, &mut extras);
+    }
     (extras, ignored)
+}
+
+/// How a shoulder extra's reason ends: what it was measured against.
+const FROM_OUTLINE: &str = "on the edge of a structure as bright as itself, measured as its protrusion from that structure's outline";
+const ON_FIXTURE: &str = "on the fixture beside the housing, found by its rise over the fixture's own noise and measured as its protrusion from the fixture";
+
+/// An extra measured by `top_shoulder` (`rise`, `level` as fractions of the
+/// local tip contrast), with the tests it passed in its reason.
+fn shoulder_result<P: Px>(
+    lo: &Leftovers<'_, P>,
+    rule: &ExtrasRule,
+    sh: &Shoulder,
+    rise: f64,
+    level: f64,
+    how: &str,
+) -> ExtraResult {
+    let max_dist = rule.max_distance_pitch * lo.pitch_mm;
+    let (u, v) = lo.sim.inverse(sh.x, sh.y);
+    let dist = rect_distance(u, v, lo.rect);
+    let ar = sh.area_px / lo.tip_px;
+    let snr = sh.snr();
+    ExtraResult {
+        x_px: sh.x,
+        y_px: sh.y,
+        area_ratio: ar,
+        distance_mm: Some(dist),
+        ignored_because: None,
+        contrast_ratio: Some(level),
+        snr: Some(snr),
+        reason: Some(format!(
+            "area {ar:.2} of a tip ≥ {}, level {level:.2} of the local tip level, {snr:.0} σ above the local noise, {dist:.2} mm from the housing (≤ {max_dist:.2}); {how} ({rise:.2} of the local tip contrast above it)",
+            rule.min_area_ratio
+        )),
+    }
+}
+
+/// How far the fixture pass's debris must rise over the fixture, in the
+/// pixel noise σ (mean over its mask). A bright fixture can be as bright as
+/// the tips (Python 590 052: fixture 90.7, tips 85.8), so reaching the tip
+/// level says nothing there, and 0.25 of a low tip contrast can lie under
+/// the noise (590 052, 590 105, 590 341: contrast 0.33–0.37, noise
+/// 10–14 DN, large tips): noise and texture clumps on the fixture passed.
+/// Debris met rises 4.5 σ (Rust 840 916) to over 10 σ (Python 620 154).
+const FIXTURE_SIGMAS: f32 = 3.0;
+
+/// Debris on a bright part's fixture that never became a candidate
+/// (`top_fixture` says where to look): each place measured as a
+/// protrusion (`shoulder_extra`, the same tests as debris across the
+/// housing's edge), counted when it is new, rises `FIXTURE_SIGMAS` above
+/// the fixture's noise, lies within the distance rule and has at least the
+/// rule's area.
+fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut Vec<ExtraResult>) {
+    let pin_px = (lo.tip_px * 4.0 / std::f64::consts::PI).sqrt();
+    let max_dist = rule.max_distance_pitch * lo.pitch_mm;
+    let core_px = rule.min_area_ratio * lo.tip_px;
+    let seeds = fixture_seeds(lo.coarse, lo.sim, lo.grid, pin_px);
+    for seed in seeds {
+        let far = |x: f64, y: f64| {
+            extras
+                .iter()
+                .all(|e| (e.x_px - x).hypot(e.y_px - y) > 0.5 * pin_px)
+        };
+        if !far(seed.0, seed.1) {
+            continue;
+        }
+        let Some((t, b)) = lo.levels.expected(seed.0, seed.1) else {
+            continue;
+        };
+        let Some((sh, rise, level)) = shoulder_extra(lo, seed, t, b, core_px) else {
+            continue;
+        };
+        let (u, v) = lo.sim.inverse(sh.x, sh.y);
+        if far(sh.x, sh.y)
+            && sh.rise >= FIXTURE_SIGMAS * sh.noise
+            && rect_distance(u, v, lo.rect) <= max_dist
+            && sh.area_px / lo.tip_px >= rule.min_area_ratio
+        {
+            extras.push(shoulder_result(lo, rule, &sh, rise, level, ON_FIXTURE));
+        }
+    }
 }
 
 /// A blob set aside as part of, or a ripple of, a brighter structure,
