@@ -41,6 +41,21 @@ pub(super) struct Leftovers<'a, P: Px> {
     pub grid: [f64; 4],
 }
 
+impl<P: Px> Leftovers<'_, P> {
+    /// A tip's width (px): the side of a square of the tip's area.
+    fn pin_px(&self) -> f64 {
+        (self.tip_px * 4.0 / std::f64::consts::PI).sqrt()
+    }
+
+    /// Whether a protrusion lies within the distance rule of the housing and
+    /// has at least the rule's area.
+    fn within_rule(&self, rule: &ExtrasRule, sh: &Shoulder) -> bool {
+        let (u, v) = self.sim.inverse(sh.x, sh.y);
+        rect_distance(u, v, self.rect) <= rule.max_distance_pitch * self.pitch_mm
+            && sh.area_px / self.tip_px >= rule.min_area_ratio
+    }
+}
+
 /// The blobs no pin took: (extras counted, blobs set aside with why).
 pub(super) fn judge_extras<P: Px>(
     lo: &Leftovers<'_, P>,
@@ -155,13 +170,11 @@ pub(super) fn judge_extras<P: Px>(
             _ => None,
         };
         if let Some((sh, rise, level)) = shoulder.filter(|s| {
-            let (u, v) = sim.inverse(s.0.x, s.0.y);
             // Two coarse blobs on one piece of debris find one protrusion.
             let new = extras.iter().all(|e: &ExtraResult| {
                 (e.x_px - s.0.x).hypot(e.y_px - s.0.y) > 0.5 * tip_px.sqrt()
             });
-            new && rect_distance(u, v, rect) <= max_dist
-                && s.0.area_px / tip_px >= rule.min_area_ratio
+            new && lo.within_rule(rule, &s.0)
         }) {
             extras.push(shoulder_result(lo, rule, &sh, rise, level, FROM_OUTLINE));
         } else if ar < rule.min_area_ratio {
@@ -282,8 +295,10 @@ fn shoulder_result<P: Px>(
 /// pixel noise σ (mean over its mask). A bright fixture can be as bright as
 /// the tips (Python 590 052: fixture 90.7, tips 85.8), so reaching the tip
 /// level says nothing there, and 0.25 of a low tip contrast can lie under
-/// the noise (590 052, 590 105, 590 341: contrast 0.33–0.37, noise
-/// 10–14 DN, large tips): noise and texture clumps on the fixture passed.
+/// the noise (590 052, 590 105: contrast 0.33–0.37, noise 10–14 DN, large
+/// tips): noise clumps on the fixture passed. A texture clump after JPEG
+/// smoothing passes even this (590 341); `top_fixture::SEED_SIGMAS`,
+/// measured at the blob's scale, is what refuses it.
 /// Debris met rises 4.5 σ (Rust 840 916) to over 10 σ (Python 620 154).
 const FIXTURE_SIGMAS: f32 = 3.0;
 
@@ -294,8 +309,7 @@ const FIXTURE_SIGMAS: f32 = 3.0;
 /// the fixture's noise, lies within the distance rule and has at least the
 /// rule's area.
 fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut Vec<ExtraResult>) {
-    let pin_px = (lo.tip_px * 4.0 / std::f64::consts::PI).sqrt();
-    let max_dist = rule.max_distance_pitch * lo.pitch_mm;
+    let pin_px = lo.pin_px();
     let core_px = rule.min_area_ratio * lo.tip_px;
     let seeds = fixture_seeds(lo.coarse, lo.sim, lo.grid, pin_px);
     for seed in seeds {
@@ -313,12 +327,7 @@ fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut 
         let Some((sh, rise, level)) = shoulder_extra(lo, seed, t, b, core_px) else {
             continue;
         };
-        let (u, v) = lo.sim.inverse(sh.x, sh.y);
-        if far(sh.x, sh.y)
-            && sh.rise >= FIXTURE_SIGMAS * sh.noise
-            && rect_distance(u, v, lo.rect) <= max_dist
-            && sh.area_px / lo.tip_px >= rule.min_area_ratio
-        {
+        if far(sh.x, sh.y) && sh.rise >= FIXTURE_SIGMAS * sh.noise && lo.within_rule(rule, &sh) {
             extras.push(shoulder_result(lo, rule, &sh, rise, level, ON_FIXTURE));
         }
     }
@@ -339,7 +348,7 @@ fn shoulder_extra<P: Px>(
     b: f32,
     core_px: f64,
 ) -> Option<(Shoulder, f64, f64)> {
-    let pin_px = (lo.tip_px * 4.0 / std::f64::consts::PI).sqrt();
+    let pin_px = lo.pin_px();
     let sh = measure_shoulder(lo.plane, lo.sign, seed, pin_px, t, core_px)?;
     let tipc = (t - b) as f64;
     if sh.touches_border || tipc <= 0.0 {

@@ -67,7 +67,7 @@ pub(super) fn fixture_seeds(
     // the whole rim stands out, 830 771).
     let r_se = (1.3 * pin_c).ceil().max(2.0) as usize;
     let open = super::morph::open_square(&smooth, w, h, r_se);
-    let th: &Vec<f32> = &smooth.iter().zip(&open).map(|(a, b)| a - b).collect();
+    let th: Vec<f32> = smooth.iter().zip(&open).map(|(a, b)| a - b).collect();
     let on_fixture: Vec<bool> = (0..w * h)
         .map(|i| {
             let (x, y) = cs.coarse.to_full((i % w) as f64, (i / w) as f64);
