@@ -301,6 +301,58 @@ pub fn search_coarse_smoothed(
     }
 }
 
+/// A blob a search found on the top-hat `tophat` (a coarse image `w` ×
+/// `h`) above `threshold`, as it stands at half its peak when the
+/// threshold cut it higher than that.
+///
+/// The threshold is the larger of 0.35 of the typical tip's peak and the
+/// top-hat's noise floor (6 σ). Fixture texture blotchy at the tips' own
+/// scale (the Python renderer's at 40–45 px tips under contrast 0.3) lifts
+/// that floor to the tips' peak: the tips then come through as their
+/// cores, a tenth to a third of their area, and no tip width fits them.
+/// Grown down to half its peak inside a window `reach` coarse px around
+/// it, a core becomes the tip's footprint again (a blurred tip's half
+/// maximum is about its edge). A blob the threshold already cut below its
+/// half peak is returned as it is.
+pub fn at_half_peak(
+    tophat: &[f32],
+    threshold: f32,
+    b: &CoarseBlob,
+    (w, h): (usize, usize),
+    reach: usize,
+) -> Blob {
+    let level = 0.5 * b.peak;
+    if threshold <= level {
+        return b.blob.clone();
+    }
+    let x0 = (b.blob.x_min as usize).saturating_sub(reach);
+    let y0 = (b.blob.y_min as usize).saturating_sub(reach);
+    let x1 = (b.blob.x_max as usize + reach + 1).min(w);
+    let y1 = (b.blob.y_max as usize + reach + 1).min(h);
+    let lab = label::label(x1 - x0, y1 - y0, |x, y| {
+        tophat[(y0 + y) * w + x0 + x] > level
+    });
+    // The component holding the blob's centroid (a core lies inside its
+    // own half-peak component).
+    let (cx, cy) = (b.blob.cx - x0 as f64, b.blob.cy - y0 as f64);
+    let Some(g) = lab.blobs.iter().min_by(|a, c| {
+        let d = |q: &Blob| (q.cx - cx).powi(2) + (q.cy - cy).powi(2);
+        d(a).total_cmp(&d(c))
+    }) else {
+        return b.blob.clone();
+    };
+    Blob {
+        area: g.area,
+        x_min: g.x_min + x0 as u32,
+        y_min: g.y_min + y0 as u32,
+        x_max: g.x_max + x0 as u32,
+        y_max: g.y_max + y0 as u32,
+        cx: g.cx + x0 as f64,
+        cy: g.cy + y0 as f64,
+        runs: Vec::new(),
+    }
+}
+
 /// The blobs of `lab` (labelled above `level` on `values`, `w` wide) with
 /// their peaks; a blob `too_big` for a tip is labelled again inside its
 /// own pixels at a level a third of the way up to its peak, recursively

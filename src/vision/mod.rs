@@ -50,6 +50,7 @@ pub mod recipe;
 pub mod report;
 pub mod result;
 pub mod scale;
+mod scale_blobs;
 mod scale_one_tip;
 pub mod side;
 mod side_bar;

@@ -32,11 +32,11 @@
 //! rows and columns or more, diagonal neighbours (a 2 × 2 part with two
 //! opposite pins missing).
 
-use super::detect::{self, CoarseBlob, Smoothing};
+use super::detect::{self, Smoothing};
 use super::error::VisionError;
 use super::gray::{Coarse, Plane, Px};
 use super::measure::{self, Localiser, Roi};
-use super::recipe::{PinShape, Recipe};
+use super::recipe::Recipe;
 
 /// What the estimate found.
 #[derive(Debug, Clone, PartialEq)]
@@ -74,39 +74,7 @@ const PEAK_SHARE: f64 = 0.35;
 /// stand about 5 % of full scale.
 const DONE_PEAK: f64 = 0.03;
 
-/// Smallest tip width tried, px.
-pub(super) const W_MIN: f64 = 3.5;
-
-pub(super) fn width_of_area(a: f64, shape: PinShape) -> f64 {
-    match shape {
-        PinShape::Square => a.sqrt(),
-        PinShape::Round => (4.0 * a / std::f64::consts::PI).sqrt(),
-    }
-}
-
-/// The area (px²) of a tip `w` px wide: [`width_of_area`]'s inverse.
-pub(super) fn area_of_width(w: f64, shape: PinShape) -> f64 {
-    match shape {
-        PinShape::Square => w * w,
-        PinShape::Round => std::f64::consts::PI / 4.0 * w * w,
-    }
-}
-
-/// A blob touching the frame's edge is no whole tip (the part lies inside
-/// the frame), and the top-hat leaves a ridge along an edge the image
-/// rises towards (vignetting in a dark-polarity image, a gradient): noise
-/// cuts that ridge into blobs evenly spaced along the edge, a lattice at
-/// whatever width is tried, which ended the ladder at 2.5–5 × the tip.
-fn touches_frame(b: &super::label::Blob, coarse: &Coarse) -> bool {
-    b.x_min == 0
-        || b.y_min == 0
-        || b.x_max as usize + 1 >= coarse.w
-        || b.y_max as usize + 1 >= coarse.h
-}
-
-/// A tip-sized blob of the coarse search: centre, width, top-hat peak and
-/// bounding box (full px).
-pub(super) type TipBlob = (f64, f64, f64, f64, [f64; 4]);
+pub(super) use super::scale_blobs::{TipBlob, W_MIN, area_of_width, tip_blobs, width_of_area};
 
 #[cfg(test)]
 fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64, mult: f64) -> Candidate {
@@ -116,40 +84,6 @@ fn score_candidate(recipe: &Recipe, coarse: &Coarse, w: f64, mult: f64) -> Candi
         w,
         mult,
     )
-}
-
-/// The coarse search at tip width `w` (smoothing box of `smoothing`): the
-/// blobs of about a tip's area not touching the frame.
-pub(super) fn tip_blobs(
-    recipe: &Recipe,
-    coarse: &Coarse,
-    w: f64,
-    smoothing: Smoothing,
-) -> Vec<TipBlob> {
-    let found = detect::search_coarse_smoothed(coarse, w, None, None, smoothing);
-    let k = coarse.k as f64;
-    let tip_area = area_of_width(w, recipe.pin_shape);
-    found
-        .blobs
-        .iter()
-        .filter_map(|b: &CoarseBlob| {
-            let a = b.blob.area as f64 * k * k;
-            let r = a / tip_area;
-            let dim = b.blob.width().max(b.blob.height()) as f64 * k;
-            ((0.3..3.0).contains(&r) && dim < 2.5 * w + 2.0 * k && !touches_frame(&b.blob, coarse))
-                .then(|| {
-                    let (x, y) = coarse.to_full(b.blob.cx, b.blob.cy);
-                    let bb = &b.blob;
-                    let bx = [
-                        bb.x_min as f64 * k,
-                        bb.y_min as f64 * k,
-                        (bb.x_max as f64 + 1.0) * k - 1.0,
-                        (bb.y_max as f64 + 1.0) * k - 1.0,
-                    ];
-                    (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64, bx)
-                })
-        })
-        .collect()
 }
 
 /// Scores the blobs found at tip width `w` as a lattice whose matched
@@ -394,30 +328,52 @@ fn tips_hold<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe, c: &Candidate)
 /// coarse search's wider smoothing box ([`Smoothing::Faint`]): small faint
 /// tips under heavy noise (contrast 0.3, σ 15 DN, 6–7 px tips) peak in
 /// the top-hat below the noise floor's 6 σ with a box of half a tip, and
-/// clear it with one of four fifths. Images whose tips the first pass
-/// finds are unchanged; when the second pass fails too, the first pass's
-/// error stands.
+/// clear it with one of four fifths. When that fails too, a third pass
+/// searches two steps of the ladder narrower than each width it scores
+/// ([`NARROW_SEARCH`]): large tips (40–45 px) on fixture texture blotchy
+/// at their own scale stand below the top-hat's noise floor at their own
+/// width and clear it at a narrower one. Images whose tips the first pass
+/// finds are unchanged; when every pass fails, the first pass's error
+/// stands.
 pub fn estimate<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     recipe: &Recipe,
     full_scale: f32,
 ) -> Result<ScaleEstimate, VisionError> {
-    match estimate_smoothed(plane, sign, recipe, full_scale, Smoothing::Normal) {
+    match estimate_smoothed(plane, sign, recipe, full_scale, Smoothing::Normal, 1.0) {
         Err(e @ VisionError::NoPins { .. }) => {
-            estimate_smoothed(plane, sign, recipe, full_scale, Smoothing::Faint).map_err(|_| e)
+            estimate_smoothed(plane, sign, recipe, full_scale, Smoothing::Faint, 1.0)
+                .or_else(|_| {
+                    estimate_smoothed(
+                        plane,
+                        sign,
+                        recipe,
+                        full_scale,
+                        Smoothing::Normal,
+                        NARROW_SEARCH,
+                    )
+                })
+                .map_err(|_| e)
         }
         r => r,
     }
 }
 
-/// [`estimate`] with one smoothing box for the coarse search.
+/// The last pass's search width, as a share of the tip width scored: two
+/// steps of the ladder narrower ([`super::scale_blobs::tip_blobs_searched_at`]).
+const NARROW_SEARCH: f64 = 1.0 / 1.44;
+
+/// [`estimate`] with one smoothing box for the coarse search, run at
+/// `search_ratio` × each tip width tried.
+
 fn estimate_smoothed<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     recipe: &Recipe,
     full_scale: f32,
     smoothing: Smoothing,
+    search_ratio: f64,
 ) -> Result<ScaleEstimate, VisionError> {
     let no_pins = |msg: String| VisionError::NoPins {
         part: recipe.part_number.clone(),
@@ -443,7 +399,7 @@ fn estimate_smoothed<P: Px>(
     let mut w = w_max;
     let mut contrast_checked = false;
     let mut blobs_at = |w: f64| -> Result<Vec<TipBlob>, VisionError> {
-        let k = detect::coarse_factor(w);
+        let k = detect::coarse_factor(search_ratio * w);
         if coarse_cache[k].is_none() {
             coarse_cache[k] = Some(Coarse::build(plane, k, sign));
         }
@@ -454,7 +410,13 @@ fn estimate_smoothed<P: Px>(
             detect::check_contrast(coarse, full_scale)?;
             contrast_checked = true;
         }
-        Ok(tip_blobs(recipe, coarse, w, smoothing))
+        Ok(super::scale_blobs::tip_blobs_searched_at(
+            recipe,
+            coarse,
+            search_ratio * w,
+            w,
+            smoothing,
+        ))
     };
     while w >= W_MIN {
         let pts = blobs_at(w)?;
@@ -752,7 +714,7 @@ mod tests {
             data: d.as_slice(),
         };
         match smoothing {
-            Some(sm) => estimate_smoothed(&plane, 1.0, r, fs, sm),
+            Some(sm) => estimate_smoothed(&plane, 1.0, r, fs, sm, 1.0),
             None => estimate(&plane, 1.0, r, fs),
         }
     }

@@ -21,7 +21,9 @@ use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, area_ratio_of,
     contrast_ratio, core_contrast, dim_tip_on_position, snr_of, tip_disc_radius,
 };
-use super::top_candidates::{faint_tips_to_add, measure_blobs, measure_candidates};
+use super::top_candidates::{
+    faint_tips_to_add, last_resort_search, measure_blobs, measure_candidates,
+};
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
 /// the grid's pose (four parameters, or three with mm_per_px known): the
@@ -108,22 +110,13 @@ pub fn inspect_top<P: Px>(
             cands.extend(add);
         }
     }
-    // Still no tip: the last pass bounds the background's closing to a
-    // clearance hole's reach (`Smoothing::HoleReach`).
-    if n_pinlike(&cands) == 0 {
-        let cs3 = detect::coarse_search_smoothed(
-            plane,
-            sign,
-            pin_px0,
-            None,
-            n_pos,
-            detect::Smoothing::HoleReach,
-        );
-        let cands3 = candidates(&cs3);
-        if n_pinlike(&cands3) > 0 {
-            cs = cs3;
-            cands = cands3;
-        }
+    // Still no tip: the last passes ([`last_resort_search`]).
+    if n_pinlike(&cands) == 0
+        && let Some((cs_last, cands_last)) =
+            last_resort_search(plane, sign, pin_px0, n_pos, &candidates)
+    {
+        cs = cs_last;
+        cands = cands_last;
     }
     let pin_pts: Vec<(f64, f64)> = cands
         .iter()

@@ -1,6 +1,7 @@
 //! The top view's candidates: every coarse blob measured at full
 //! resolution (two coarse blobs that resolve to one are kept once), and
-//! which of a second, fainter pass's tip-like blobs join the first pass's.
+//! which of a second, fainter pass's tip-like blobs join the first pass's,
+//! and the last passes when no pass finds a tip.
 //! Kept apart from `top.rs`, which places the lattice and judges.
 
 use super::InspectOptions;
@@ -93,4 +94,63 @@ pub(super) fn faint_tips_to_add(
                 .any(|t| at_pitch((t.0 - c.m.x).hypot(t.1 - c.m.y)))
         })
         .collect()
+}
+
+/// The last passes when neither the usual nor the wider smoothing box
+/// finds a tip-like candidate: the search and its candidates of the first
+/// pass that finds one, or `None`. `candidates` measures a search's blobs
+/// and says which are tip-like.
+///
+/// 1. The background's closing bounded to a clearance hole's reach
+///    ([`detect::Smoothing::HoleReach`]): a one-row housing narrower than
+///    the closing's window, on a fixture beyond the tips' level, is filled
+///    to the fixture's level by the unbounded closing and its tips vanish
+///    from the top-hat.
+/// 2. Fixture texture blotchy at the tips' own scale (the Python
+///    renderer's, under 40–45 px tips at contrast 0.3) lifts the
+///    top-hat's noise floor to the tips' peak: their cores clear it and
+///    their windows cut them, or nothing clears it. The search at the tip
+///    width and at one and two steps of the scale ladder narrower (the
+///    tip still passes whole through the top-hat, the texture's larger
+///    blotches less), with its blobs grown to half their peak
+///    ([`detect::at_half_peak`]), finds them whole.
+pub(super) fn last_resort_search<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    pin_px: f64,
+    n_pos: Option<usize>,
+    candidates: &dyn Fn(&CoarseSearch) -> Vec<Candidate>,
+) -> Option<(CoarseSearch, Vec<Candidate>)> {
+    let tip_like = |c: &[Candidate]| c.iter().any(|c| c.pinlike);
+    let hole_reach = detect::coarse_search_smoothed(
+        plane,
+        sign,
+        pin_px,
+        None,
+        n_pos,
+        detect::Smoothing::HoleReach,
+    );
+    let cands = candidates(&hole_reach);
+    if tip_like(&cands) {
+        return Some((hole_reach, cands));
+    }
+    for f in [1.0, 1.0 / 1.2, 1.0 / 1.44] {
+        let mut cs = detect::coarse_search(plane, sign, f * pin_px, None, n_pos);
+        let reach = (1.5 * pin_px / cs.coarse.k as f64).ceil() as usize;
+        let size = (cs.coarse.w, cs.coarse.h);
+        let grown: Vec<detect::CoarseBlob> = cs
+            .blobs
+            .iter()
+            .map(|b| detect::CoarseBlob {
+                blob: detect::at_half_peak(&cs.tophat, cs.threshold, b, size, reach),
+                peak: b.peak,
+            })
+            .collect();
+        cs.blobs = grown;
+        let cands = candidates(&cs);
+        if tip_like(&cands) {
+            return Some((cs, cands));
+        }
+    }
+    None
 }
