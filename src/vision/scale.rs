@@ -366,7 +366,6 @@ const NARROW_SEARCH: f64 = 1.0 / 1.44;
 
 /// [`estimate`] with one smoothing box for the coarse search, run at
 /// `search_ratio` × each tip width tried.
-
 fn estimate_smoothed<P: Px>(
     plane: &Plane<P>,
     sign: f32,
