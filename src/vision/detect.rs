@@ -478,4 +478,41 @@ mod tests {
         assert_eq!(four.blobs.len(), 4);
         assert!(four.blobs.iter().all(|b| b.peak > 90.0));
     }
+
+    /// A cone of peak 100 and radius 10 on a flat top-hat: cut at 80 it is
+    /// a core of radius 2; grown to half its peak it is the disc of radius
+    /// 5, centred where the cone is. A blob the
+    /// threshold cut below its half peak comes back as it was.
+    #[test]
+    fn a_core_cut_near_its_peak_grows_to_its_half_peak_footprint() {
+        let (w, h) = (40usize, 40usize);
+        let tophat: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f32 - 20.0, (i / w) as f32 - 20.0);
+                (100.0 - 10.0 * x.hypot(y)).max(0.0)
+            })
+            .collect();
+        let core = |t: f32| {
+            let lab = label::label(w, h, |x, y| tophat[y * w + x] > t);
+            CoarseBlob {
+                blob: lab.blobs[0].clone(),
+                peak: 100.0,
+            }
+        };
+        let cut = core(80.0);
+        assert!(cut.blob.area < 20, "{}", cut.blob.area);
+        let grown = at_half_peak(&tophat, 80.0, &cut, (w, h), 8);
+        // Pixels strictly inside radius 5 (value above 50): 69 of them.
+        let disc = (-5i32..=5)
+            .flat_map(|y| (-5i32..=5).map(move |x| x * x + y * y))
+            .filter(|&d2| d2 < 25)
+            .count() as u64;
+        assert_eq!(grown.area, disc);
+        assert!((grown.cx - 20.0).abs() < 0.01 && (grown.cy - 20.0).abs() < 0.01);
+        let low = core(30.0);
+        assert_eq!(
+            at_half_peak(&tophat, 30.0, &low, (w, h), 8).area,
+            low.blob.area
+        );
+    }
 }
