@@ -41,33 +41,50 @@ pub(super) fn touches_frame(b: &super::label::Blob, coarse: &Coarse) -> bool {
 pub(super) type TipBlob = (f64, f64, f64, f64, [f64; 4]);
 
 /// The coarse search at tip width `w` (smoothing box of `smoothing`): the
-/// blobs of about a tip's area not touching the frame.
+/// blobs of about a tip's area not touching the frame, as found (not grown:
+/// the one-tip fallback takes the strongest blob over the ladder, and a
+/// grown core, the strongest part of anything, would win it).
 pub(super) fn tip_blobs(
     recipe: &Recipe,
     coarse: &Coarse,
     w: f64,
     smoothing: Smoothing,
 ) -> Vec<TipBlob> {
-    tip_blobs_searched_at(recipe, coarse, w, w, smoothing)
+    blobs_of(recipe, coarse, w, w, smoothing, false)
 }
 
 /// The blobs of about the area of a tip `w` px wide, not touching the
 /// frame, found by the coarse search run for tips `w_search` px wide
-/// (`coarse` built for that width). Blobs the search's threshold cut above
-/// their half peak are grown to it ([`detect::at_half_peak`]), so a blob's
-/// area is its footprint, not how far it clears the noise floor.
+/// (`coarse` built for that width).
 ///
-/// A search narrower than the width scored is the fallback for tips whose
+/// A search narrower than the width scored is the last pass for tips whose
 /// own-width search finds nothing: fixture texture blotchy at the tips'
-/// scale lifts the top-hat's noise floor above their peak there, while a
+/// scale lifts the top-hat's noise floor to their peak there, while a
 /// top-hat a few steps narrower still passes a tip whole and the larger
-/// blotches less.
+/// blotches less. Its blobs are grown to half their peak
+/// ([`detect::at_half_peak`]): their cores clear the floor, and a core is
+/// no tip-sized blob. The usual passes (`w_search == w`) take blobs as
+/// found: growing them there too changed which lattice won on images
+/// judged right before (Rust 830 287, a 2 × 2 part with two pins missing,
+/// became an error).
 pub(super) fn tip_blobs_searched_at(
     recipe: &Recipe,
     coarse: &Coarse,
     w_search: f64,
     w: f64,
     smoothing: Smoothing,
+) -> Vec<TipBlob> {
+    blobs_of(recipe, coarse, w_search, w, smoothing, w_search < w)
+}
+
+/// [`tip_blobs_searched_at`], its blobs grown to half their peak or not.
+fn blobs_of(
+    recipe: &Recipe,
+    coarse: &Coarse,
+    w_search: f64,
+    w: f64,
+    smoothing: Smoothing,
+    grow: bool,
 ) -> Vec<TipBlob> {
     let found = detect::search_coarse_smoothed(coarse, w_search, None, None, smoothing);
     let k = coarse.k as f64;
@@ -77,13 +94,17 @@ pub(super) fn tip_blobs_searched_at(
         .blobs
         .iter()
         .map(|b: &CoarseBlob| CoarseBlob {
-            blob: detect::at_half_peak(
-                &found.tophat,
-                found.threshold,
-                b,
-                (coarse.w, coarse.h),
-                reach,
-            ),
+            blob: if grow {
+                detect::at_half_peak(
+                    &found.tophat,
+                    found.threshold,
+                    b,
+                    (coarse.w, coarse.h),
+                    reach,
+                )
+            } else {
+                b.blob.clone()
+            },
             peak: b.peak,
         })
         .filter_map(|b: CoarseBlob| {
