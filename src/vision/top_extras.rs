@@ -251,9 +251,7 @@ pub(super) fn judge_extras<P: Px>(
             extras.push(e);
         }
     }
-    if sign > 0.0 {
-        fixture_extras(lo, rule, &mut extras);
-    }
+    fixture_extras(lo, rule, &mut extras);
     (extras, ignored)
 }
 
@@ -302,7 +300,7 @@ fn shoulder_result<P: Px>(
 /// Debris met rises 4.5 σ (Rust 840 916) to over 10 σ (Python 620 154).
 const FIXTURE_SIGMAS: f32 = 3.0;
 
-/// Debris on a bright part's fixture that never became a candidate
+/// Debris on the fixture that never became a candidate
 /// (`top_fixture` says where to look): each place measured as a
 /// protrusion (`shoulder_extra`, the same tests as debris across the
 /// housing's edge), counted when it is new, rises `FIXTURE_SIGMAS` above
@@ -311,7 +309,7 @@ const FIXTURE_SIGMAS: f32 = 3.0;
 fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut Vec<ExtraResult>) {
     let pin_px = lo.pin_px();
     let core_px = rule.min_area_ratio * lo.tip_px;
-    let seeds = fixture_seeds(lo.coarse, lo.sim, lo.grid, pin_px);
+    let seeds = fixture_seeds(lo.coarse, lo.sim, lo.grid, pin_px, lo.sign < 0.0);
     for seed in seeds {
         let far = |x: f64, y: f64| {
             extras
