@@ -36,8 +36,11 @@ pub(crate) struct Candidate {
 /// ratio (within 0.1–0.3 of it for intact, bent and damaged tips alike) —
 /// unless the pixel noise is comparable to the tip's contrast: then the
 /// half-level mask takes in noise clumps and the coverage reads good tips
-/// up to 2.3 × their neighbours', and the energy alone is the ratio
-/// ([`super::top_noisy::coverage_is_noise`]).
+/// up to 2.3 × their neighbours'. Noise clumps only add to the coverage,
+/// so there a coverage above the energy is not believed and the energy
+/// alone is the ratio ([`super::top_noisy::coverage_is_noise`]); one below
+/// it still counts (a noisy blob on a missing pin's position, Rust 820 574,
+/// reads 0.60 by its energy alone, the background there being off).
 pub(crate) fn area_ratio_of(
     cands: &[Candidate],
     assigned: &[usize],
@@ -54,8 +57,14 @@ pub(crate) fn area_ratio_of(
         return abs;
     };
     match (me, mc) {
-        (Some(me), _) if me > 0.0 && super::top_noisy::coverage_is_noise(m) => m.energy / me,
-        (Some(me), Some(mc)) if me > 0.0 && mc > 0.0 => 0.5 * (m.energy / me + m.area_px / mc),
+        (Some(me), Some(mc)) if me > 0.0 && mc > 0.0 => {
+            let (e, c) = (m.energy / me, m.area_px / mc);
+            if c > e && super::top_noisy::coverage_is_noise(m) {
+                e
+            } else {
+                0.5 * (e + c)
+            }
+        }
         (Some(me), _) if me > 0.0 => m.energy / me,
         _ => abs,
     }

@@ -633,9 +633,11 @@ pub fn inspect_top<P: Px>(
                 d / pin_px,
                 m.elongation,
             );
-        // Noise clumps carried a whole tip's mask to the window's border:
-        // its disc energy and the blurred-tip model decide (`top_noisy`).
-        let whole = (blurred && !tip_bright && !dim && m.touches_border)
+        // A tip-bright look whose mask noise clumps carried to the window's
+        // border: its disc energy and the blurred-tip model decide
+        // (`top_noisy`).
+        let looks_tip = rho >= MIN_TIP_CONTRAST && snr >= MIN_SNR;
+        let whole = (blurred && looks_tip && !tip_bright && !dim && m.touches_border)
             .then(|| neighbour_medians(&cands, &assigned, (nx, ny), None))
             .flatten()
             .and_then(|(me, _)| noisy.whole_tip((nx, ny), m.noise, bg_at(nx, ny), me?));
