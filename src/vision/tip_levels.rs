@@ -39,8 +39,8 @@ pub(crate) struct Candidate {
 /// up to 2.3 × their neighbours'. Noise clumps only add to the coverage,
 /// so there a coverage above the energy is not believed and the energy
 /// alone is the ratio ([`super::top_noisy::coverage_is_noise`]); one below
-/// it still counts (a noisy blob on a missing pin's position, Rust 820 574,
-/// reads 0.60 by its energy alone, the background there being off).
+/// it still counts, as the energy has its own bias (the background's error
+/// over the disc).
 pub(crate) fn area_ratio_of(
     cands: &[Candidate],
     assigned: &[usize],
