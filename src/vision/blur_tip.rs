@@ -54,18 +54,10 @@ pub(crate) fn refine_centres<P: Px>(
     min_pitch_px: f64,
 ) -> Vec<(usize, usize)> {
     let half_w = 0.5 * recipe.pin_mm * sim.s;
-    let window = (1.5 * half_w + 3.0 * blur_sigma + 2.0).min(0.5 * min_pitch_px);
     let mut done = Vec::with_capacity(intact.len());
     for &(pi, ci) in intact {
         let m = &cands[ci].m;
-        let prior = TipPrior {
-            round: recipe.pin_shape == PinShape::Round,
-            theta: sim.theta,
-            half_w,
-            sigma: blur_sigma,
-            hole: nominal[pi],
-            window,
-        };
+        let prior = prior_at(recipe, sim, nominal[pi], blur_sigma, min_pitch_px);
         let Some(f) = fit_tip(plane, sign, (m.x, m.y), &prior) else {
             continue;
         };
@@ -80,6 +72,27 @@ pub(crate) fn refine_centres<P: Px>(
         done.push((pi, ci));
     }
     done
+}
+
+/// The model's prior for the tip in the hole centred at `hole` (px): the
+/// recipe's tip at the fitted scale and rotation, the tips' edge spread,
+/// and a window holding the tip, its hole and the blur, within half a pitch.
+pub(crate) fn prior_at(
+    recipe: &Recipe,
+    sim: &Similarity,
+    hole: (f64, f64),
+    blur_sigma: f64,
+    min_pitch_px: f64,
+) -> TipPrior {
+    let half_w = 0.5 * recipe.pin_mm * sim.s;
+    TipPrior {
+        round: recipe.pin_shape == PinShape::Round,
+        theta: sim.theta,
+        half_w,
+        sigma: blur_sigma,
+        hole,
+        window: (1.5 * half_w + 3.0 * blur_sigma + 2.0).min(0.5 * min_pitch_px),
+    }
 }
 
 /// Whether the model's centre `fit` is still the tip whose coverage

@@ -65,6 +65,7 @@ mod top_candidates;
 mod top_extras;
 mod top_faint;
 mod top_fixture;
+mod top_noisy;
 mod top_shoulder;
 mod top_window;
 pub mod truth;

@@ -33,7 +33,14 @@ pub(crate) struct Candidate {
 /// 0.6 ×. The half-level coverage, taken against the level beside the tip
 /// (hole or housing), has no such bias; blur grows it, but alike for every
 /// tip of the part, so against the neighbours' it stays near the area
-/// ratio (within 0.1–0.3 of it for intact, bent and damaged tips alike).
+/// ratio (within 0.1–0.3 of it for intact, bent and damaged tips alike) —
+/// unless the pixel noise is comparable to the tip's contrast: then the
+/// half-level mask takes in noise clumps and the coverage reads good tips
+/// up to 2.3 × their neighbours'. Noise clumps only add to the coverage,
+/// so there a coverage above the energy is not believed and the energy
+/// alone is the ratio ([`super::top_noisy::coverage_is_noise`]); one below
+/// it still counts, as the energy has its own bias (the background's error
+/// over the disc).
 pub(crate) fn area_ratio_of(
     cands: &[Candidate],
     assigned: &[usize],
@@ -46,25 +53,46 @@ pub(crate) fn area_ratio_of(
     if !blurred {
         return abs;
     }
+    let Some((me, mc)) = neighbour_medians(cands, assigned, (m.x, m.y), Some(ci)) else {
+        return abs;
+    };
+    match (me, mc) {
+        (Some(me), Some(mc)) if me > 0.0 && mc > 0.0 => {
+            let (e, c) = (m.energy / me, m.area_px / mc);
+            if c > e && super::top_noisy::coverage_is_noise(m) {
+                e
+            } else {
+                0.5 * (e + c)
+            }
+        }
+        (Some(me), _) if me > 0.0 => m.energy / me,
+        _ => abs,
+    }
+}
+
+/// The medians of the energy and of the coverage area of the four tips of
+/// `assigned` nearest `at` (leaving out `except`); `None` under two tips.
+pub(crate) fn neighbour_medians(
+    cands: &[Candidate],
+    assigned: &[usize],
+    at: (f64, f64),
+    except: Option<usize>,
+) -> Option<(Option<f64>, Option<f64>)> {
     let mut d: Vec<(f64, (f64, f64))> = assigned
         .iter()
-        .filter(|&&o| o != ci)
+        .filter(|&&o| Some(o) != except)
         .map(|&o| {
             let q = &cands[o].m;
-            ((q.x - m.x).hypot(q.y - m.y), (q.energy, q.area_px))
+            ((q.x - at.0).hypot(q.y - at.1), (q.energy, q.area_px))
         })
         .collect();
     if d.len() < 2 {
-        return abs;
+        return None;
     }
     d.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut e: Vec<f64> = d.iter().take(4).map(|p| p.1.0).collect();
     let mut c: Vec<f64> = d.iter().take(4).map(|p| p.1.1).collect();
-    match (grid::median(&mut e), grid::median(&mut c)) {
-        (Some(me), Some(mc)) if me > 0.0 && mc > 0.0 => 0.5 * (m.energy / me + m.area_px / mc),
-        (Some(me), _) if me > 0.0 => m.energy / me,
-        _ => abs,
-    }
+    Some((grid::median(&mut e), grid::median(&mut c)))
 }
 
 /// A blob the second look finds on an empty grid position, under the

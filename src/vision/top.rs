@@ -19,10 +19,10 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, area_ratio_of,
-    contrast_ratio, core_contrast, dim_tip_on_position, snr_of, tip_disc_radius,
+    contrast_ratio, core_contrast, dim_tip_on_position, neighbour_medians, snr_of, tip_disc_radius,
 };
 use super::top_candidates::{
-    faint_tips_to_add, last_resort_search, measure_blobs, measure_candidates,
+    add_faint_debris, faint_tips_to_add, last_resort_search, measure_candidates,
 };
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
@@ -555,6 +555,18 @@ pub fn inspect_top<P: Px>(
     // gain) is found here; what is there otherwise is said in the reason.
     let mut empty_look: Vec<Option<(f64, f64)>> = vec![None; positions.len()];
     let mut dim_tip = vec![false; positions.len()];
+    // Energy ratios of whole tips read through noise (`top_noisy`).
+    let mut by_energy: Vec<Option<f64>> = vec![None; positions.len()];
+    let noisy = super::top_noisy::EmptyLook {
+        plane,
+        sign,
+        recipe,
+        sim: &sim,
+        blur_sigma,
+        min_pitch_px,
+        disc_r,
+        pin_px,
+    };
     for pi in 0..positions.len() {
         if pos_cand[pi].is_some() {
             continue;
@@ -614,7 +626,19 @@ pub fn inspect_top<P: Px>(
                 d / pin_px,
                 m.elongation,
             );
-        if tip_bright || dim {
+        // A tip-bright look whose mask noise clumps carried to the window's
+        // border: its disc energy and the blurred-tip model decide
+        // (`top_noisy`).
+        let looks_tip = rho >= MIN_TIP_CONTRAST && snr >= MIN_SNR;
+        let whole = (blurred && looks_tip && !tip_bright && !dim && m.touches_border)
+            .then(|| neighbour_medians(&cands, &assigned, (nx, ny), None))
+            .flatten()
+            .and_then(|(me, _)| noisy.whole_tip((nx, ny), m.noise, bg_at(nx, ny), me?));
+        if let Some(((x, y), ratio)) = whole {
+            (m.x, m.y) = (x, y);
+            by_energy[pi] = Some(ratio);
+        }
+        if tip_bright || dim || whole.is_some() {
             dim_tip[pi] = dim;
             let pinlike = m.elongation < 3.0;
             cands.push(Candidate {
@@ -653,7 +677,7 @@ pub fn inspect_top<P: Px>(
             let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);
             let (du, dv) = (du * mm_per_px, dv * mm_per_px);
             let off = du.hypot(dv);
-            let ar = area_of(&cands, ci);
+            let ar = by_energy[pi].unwrap_or_else(|| area_of(&cands, ci));
             pr.x_px = Some(m.x);
             pr.y_px = Some(m.y);
             pr.dx_mm = Some(du);
@@ -719,30 +743,8 @@ pub fn inspect_top<P: Px>(
             ]
         }
     };
-    // Debris fainter than the coarse threshold, where it stands clear of
-    // its neighbourhood (`top_faint`): candidates for the extras only,
-    // added once every pin is placed.
-    for (m, roi, seed) in measure_blobs(
-        plane,
-        sign,
-        &cs,
-        &super::top_faint::faint_blobs(&cs, pin_px0),
-        pin_px0,
-        opts,
-    ) {
-        if cands
-            .iter()
-            .all(|c| (c.m.x - m.x).hypot(c.m.y - m.y) > 0.5 * pin_px0)
-        {
-            cands.push(Candidate {
-                m,
-                pinlike: false,
-                roi,
-                seed,
-            });
-            cand_used.push(false);
-        }
-    }
+    // Debris fainter than the coarse threshold: extras' candidates only.
+    add_faint_debris(plane, sign, &cs, pin_px0, opts, &mut cands, &mut cand_used);
     let grown = |g: f64| [-u_half - g, u_half + g, -v_half - g, v_half + g];
     let (extras, ignored) = super::top_extras::judge_extras(
         &super::top_extras::Leftovers {

@@ -56,6 +56,36 @@ pub(super) fn measure_blobs<P: Px>(
     kept
 }
 
+/// Debris fainter than the coarse threshold, where it stands clear of its
+/// neighbourhood (`top_faint`): added to `cands` (unused, not pin-like) as
+/// candidates for the extras only, once every pin is placed, where no
+/// candidate lies within half a tip.
+pub(super) fn add_faint_debris<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    cs: &CoarseSearch,
+    pin_px: f64,
+    opts: &InspectOptions,
+    cands: &mut Vec<Candidate>,
+    used: &mut Vec<bool>,
+) {
+    let faint = super::top_faint::faint_blobs(cs, pin_px);
+    for (m, roi, seed) in measure_blobs(plane, sign, cs, &faint, pin_px, opts) {
+        if cands
+            .iter()
+            .all(|c| (c.m.x - m.x).hypot(c.m.y - m.y) > 0.5 * pin_px)
+        {
+            cands.push(Candidate {
+                m,
+                pinlike: false,
+                roi,
+                seed,
+            });
+            used.push(false);
+        }
+    }
+}
+
 /// The second pass's tip-like blobs worth adding to the first pass's
 /// candidates: not within half a tip of a blob the first pass has, a
 /// contrast of at least [`MIN_SNR`] σ over the noise, and a pitch (±15 %,

@@ -5,8 +5,9 @@
 //! envelope (`vision::synth_envelope`, exact truth from the generator's
 //! drawing), seeds from the tuning range, each one that ended as an error
 //! before (2026-12-02, commit cfdf3cc). Also a part of three pins whose
-//! grid only the housing's outline can place (`vision::housing`), and good
-//! tips off-centre in their holes under blur (`vision::blur_tip`).
+//! grid only the housing's outline can place (`vision::housing`), good
+//! tips off-centre in their holes under blur (`vision::blur_tip`), and good
+//! tips under noise comparable to their contrast (`vision::top_noisy`).
 
 use crate::common;
 
@@ -112,5 +113,40 @@ fn good_pins_off_centre_in_their_holes_under_blur_are_not_bent() {
             .find(|p| (p.row, p.col) == pos)
             .expect("the pin is inspected");
         assert_eq!(p.status, pinsight::vision::PinStatus::Ok, "{seed}: {pos:?}");
+    }
+}
+
+/// Good pins of dark, low-contrast parts under strong noise and blur
+/// (`vision::top_noisy`; contrast 0.33–0.47, noise 11–14 DN, blur 1.6–1.9
+/// px, 6.2–6.6 px tips): the half-level mask of a tip stands barely a σ
+/// above the background and takes in noise clumps, so a good tip's
+/// coverage read 2.0 × its neighbours' (damaged), and on a position the
+/// coarse search left empty the second look's mask ran into its window's
+/// border and the pin read missing. The tip's disc energy decides now.
+/// Each case failed before (820 234: (0,2) damaged and (2,11) missing;
+/// 840 364: (0,1) damaged and (0,8) missing; 830 795: (0,12) missing).
+#[test]
+fn good_pins_under_noise_as_strong_as_their_contrast_are_not_damaged_or_missing() {
+    use pinsight::vision::PinStatus;
+    for (seed, pos) in [
+        (820_234u64, [(0u32, 2u32), (2, 11)]),
+        (840_364, [(0, 1), (0, 8)]),
+        (830_795, [(0, 12), (0, 12)]),
+    ] {
+        let (case, r, ins) = common::envelope_case(seed);
+        let c = r.compare(&case.factors, &ins);
+        assert!(
+            c.verdict_ok,
+            "{seed}: verdict wrong: {:?}",
+            c.status_mismatches
+        );
+        for pos in pos {
+            let p = ins
+                .pins
+                .iter()
+                .find(|p| (p.row, p.col) == pos)
+                .expect("the pin is inspected");
+            assert_eq!(p.status, PinStatus::Ok, "{seed}: {pos:?}");
+        }
     }
 }
