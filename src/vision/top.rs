@@ -111,9 +111,10 @@ pub fn inspect_top<P: Px>(
         }
     }
     // Still no tip: the last passes ([`last_resort_search`]).
+    let pitch_px0 = (recipe.pitch_mm[0] * s0, recipe.pitch_mm[1] * s0);
     if n_pinlike(&cands) == 0
         && let Some((cs_last, cands_last)) =
-            last_resort_search(plane, sign, pin_px0, n_pos, &candidates)
+            last_resort_search(plane, sign, pin_px0, pitch_px0, n_pos, &candidates)
     {
         cs = cs_last;
         cands = cands_last;

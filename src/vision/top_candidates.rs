@@ -143,11 +143,16 @@ pub(super) fn faint_tips_to_add(
 ///    width and at one and two steps of the scale ladder narrower (the
 ///    tip still passes whole through the top-hat, the texture's larger
 ///    blotches less), with its blobs grown to half their peak
-///    ([`detect::at_half_peak`]), finds them whole.
+///    ([`detect::at_half_peak`]), finds them whole. Grown cores of noise
+///    are tip-sized too (pure noise of 256 DN gave "tips" on 65 % of the
+///    positions), so this pass counts only when two of its tip-like
+///    candidates stand a pitch apart (±15 %, `pitch` in px along x and y):
+///    the lattice the scale search already asked of tips.
 pub(super) fn last_resort_search<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     pin_px: f64,
+    pitch: (f64, f64),
     n_pos: Option<usize>,
     candidates: &dyn Fn(&CoarseSearch) -> Vec<Candidate>,
 ) -> Option<(CoarseSearch, Vec<Candidate>)> {
@@ -178,9 +183,26 @@ pub(super) fn last_resort_search<P: Px>(
             .collect();
         cs.blobs = grown;
         let cands = candidates(&cs);
-        if tip_like(&cands) {
+        if pitch_pair(&cands, pitch) {
             return Some((cs, cands));
         }
     }
     None
+}
+
+/// Whether two tip-like candidates stand a pitch apart (within ±15 % of
+/// either pitch, px).
+fn pitch_pair(cands: &[Candidate], pitch: (f64, f64)) -> bool {
+    let tips: Vec<(f64, f64)> = cands
+        .iter()
+        .filter(|c| c.pinlike)
+        .map(|c| (c.m.x, c.m.y))
+        .collect();
+    let near = |d: f64, p: f64| (d / p - 1.0).abs() < 0.15;
+    tips.iter().enumerate().any(|(i, a)| {
+        tips[i + 1..].iter().any(|b| {
+            let d = (a.0 - b.0).hypot(a.1 - b.1);
+            near(d, pitch.0) || near(d, pitch.1)
+        })
+    })
 }

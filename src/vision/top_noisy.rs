@@ -18,19 +18,6 @@ use super::gray::{Plane, Px};
 use super::measure::{self, BlobMeasure};
 use super::recipe::Recipe;
 
-/// Pixel noise σ above this fraction of a tip's own contrast (`hi − lo`)
-/// makes its coverage area noise: the half-level threshold then stands
-/// under 1.25 σ above the background, so over a tenth of the background's
-/// pixels cross it and join the mask in clumps. Among the good tips of the
-/// Rust 820 000 set, the coverage ratio's spread is that of the energy
-/// ratio (≈ 0.06–0.1) below 0.4 and three times it above.
-pub(crate) const NOISY_COVERAGE: f32 = 0.4;
-
-/// Whether a blob's coverage area is noise ([`NOISY_COVERAGE`]).
-pub(crate) fn coverage_is_noise(m: &BlobMeasure) -> bool {
-    m.noise > NOISY_COVERAGE * (m.hi - m.lo)
-}
-
 /// The least disc energy, as a fraction of the neighbouring tips' median,
 /// that makes an empty position's look a whole tip: a missing pin leaves
 /// its clearance hole, on the far side of the housing from the tips, whose
