@@ -15,7 +15,7 @@
 use super::blur_tip;
 use super::fit::Similarity;
 use super::gray::{Plane, Px};
-use super::measure::{self, BlobMeasure};
+use super::measure;
 use super::recipe::Recipe;
 
 /// The least disc energy, as a fraction of the neighbouring tips' median,
