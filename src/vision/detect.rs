@@ -353,6 +353,23 @@ pub fn at_half_peak(
     }
 }
 
+/// [`at_half_peak`] for every blob of a search, peaks kept.
+pub fn grown_to_half_peak(
+    tophat: &[f32],
+    threshold: f32,
+    blobs: &[CoarseBlob],
+    size: (usize, usize),
+    reach: usize,
+) -> Vec<CoarseBlob> {
+    blobs
+        .iter()
+        .map(|b| CoarseBlob {
+            blob: at_half_peak(tophat, threshold, b, size, reach),
+            peak: b.peak,
+        })
+        .collect()
+}
+
 /// The blobs of `lab` (labelled above `level` on `values`, `w` wide) with
 /// their peaks; a blob `too_big` for a tip is labelled again inside its
 /// own pixels at a level a third of the way up to its peak, recursively

@@ -89,25 +89,19 @@ fn blobs_of(
     let found = detect::search_coarse_smoothed(coarse, w_search, None, None, smoothing);
     let k = coarse.k as f64;
     let tip_area = area_of_width(w, recipe.pin_shape);
-    let reach = (1.5 * w / k).ceil() as usize;
-    found
-        .blobs
+    let grown;
+    let blobs: &[CoarseBlob] = if grow {
+        let reach = (1.5 * w / k).ceil() as usize;
+        let size = (coarse.w, coarse.h);
+        grown =
+            detect::grown_to_half_peak(&found.tophat, found.threshold, &found.blobs, size, reach);
+        &grown
+    } else {
+        &found.blobs
+    };
+    blobs
         .iter()
-        .map(|b: &CoarseBlob| CoarseBlob {
-            blob: if grow {
-                detect::at_half_peak(
-                    &found.tophat,
-                    found.threshold,
-                    b,
-                    (coarse.w, coarse.h),
-                    reach,
-                )
-            } else {
-                b.blob.clone()
-            },
-            peak: b.peak,
-        })
-        .filter_map(|b: CoarseBlob| {
+        .filter_map(|b: &CoarseBlob| {
             let a = b.blob.area as f64 * k * k;
             let r = a / tip_area;
             let dim = b.blob.width().max(b.blob.height()) as f64 * k;

@@ -113,17 +113,19 @@ pub(super) fn faint_tips_to_add(
         .chain(new.iter())
         .map(|c| (c.m.x, c.m.y))
         .collect();
-    let at_pitch = |d: f64| {
-        [pitch_px.0, pitch_px.1]
-            .iter()
-            .any(|&p| p > 0.0 && (d - p).abs() < 0.15 * p)
-    };
     new.into_iter()
         .filter(|c| {
             tips.iter()
-                .any(|t| at_pitch((t.0 - c.m.x).hypot(t.1 - c.m.y)))
+                .any(|t| at_pitch((t.0 - c.m.x).hypot(t.1 - c.m.y), pitch_px))
         })
         .collect()
+}
+
+/// Whether a distance `d` (px) is one of the two pitches (px), ±15 %.
+fn at_pitch(d: f64, pitch_px: (f64, f64)) -> bool {
+    [pitch_px.0, pitch_px.1]
+        .iter()
+        .any(|&p| p > 0.0 && (d - p).abs() < 0.15 * p)
 }
 
 /// The last passes when neither the usual nor the wider smoothing box
@@ -173,15 +175,7 @@ pub(super) fn last_resort_search<P: Px>(
         let mut cs = detect::coarse_search(plane, sign, f * pin_px, None, n_pos);
         let reach = (1.5 * pin_px / cs.coarse.k as f64).ceil() as usize;
         let size = (cs.coarse.w, cs.coarse.h);
-        let grown: Vec<detect::CoarseBlob> = cs
-            .blobs
-            .iter()
-            .map(|b| detect::CoarseBlob {
-                blob: detect::at_half_peak(&cs.tophat, cs.threshold, b, size, reach),
-                peak: b.peak,
-            })
-            .collect();
-        cs.blobs = grown;
+        cs.blobs = detect::grown_to_half_peak(&cs.tophat, cs.threshold, &cs.blobs, size, reach);
         let cands = candidates(&cs);
         if pitch_pair(&cands, pitch) {
             return Some((cs, cands));
@@ -198,11 +192,9 @@ fn pitch_pair(cands: &[Candidate], pitch: (f64, f64)) -> bool {
         .filter(|c| c.pinlike)
         .map(|c| (c.m.x, c.m.y))
         .collect();
-    let near = |d: f64, p: f64| (d / p - 1.0).abs() < 0.15;
     tips.iter().enumerate().any(|(i, a)| {
-        tips[i + 1..].iter().any(|b| {
-            let d = (a.0 - b.0).hypot(a.1 - b.1);
-            near(d, pitch.0) || near(d, pitch.1)
-        })
+        tips[i + 1..]
+            .iter()
+            .any(|b| at_pitch((a.0 - b.0).hypot(a.1 - b.1), pitch))
     })
 }
