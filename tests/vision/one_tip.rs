@@ -150,3 +150,35 @@ fn good_pins_under_noise_as_strong_as_their_contrast_are_not_damaged_or_missing(
         }
     }
 }
+
+/// Pins near or past the position limit on parts under strong blur, where
+/// each tip's model fitted its own blur σ (`vision::blur_tip::common_sigma`):
+/// a tip off-centre in its hole traded σ against its centre along the
+/// offset. Bent end or middle pins of 1 × 3 parts fitted σ 1.3–2.2 × the
+/// part's and came back 0.5 px towards the hole, so they read ok (820 148:
+/// (0,2) bent 1.64 tolerances, measured 0.96; 830 116: (0,1)); a good pin
+/// of a 1 × 11 part 0.80 tolerances off read bent (860 330: (0,1)). The
+/// tips are now fitted again with σ held at the part's median.
+#[test]
+fn pins_off_centre_under_blur_are_measured_with_the_parts_blur() {
+    use pinsight::vision::PinStatus;
+    for (seed, pos, status) in [
+        (820_148u64, (0u32, 2u32), PinStatus::Bent),
+        (830_116, (0, 1), PinStatus::Bent),
+        (860_330, (0, 1), PinStatus::Ok),
+    ] {
+        let (case, r, ins) = common::envelope_case(seed);
+        let c = r.compare(&case.factors, &ins);
+        assert!(
+            c.verdict_ok,
+            "{seed}: verdict wrong: {:?}",
+            c.status_mismatches
+        );
+        let p = ins
+            .pins
+            .iter()
+            .find(|p| (p.row, p.col) == pos)
+            .expect("the pin is inspected");
+        assert_eq!(p.status, status, "{seed}: {pos:?}");
+    }
+}
