@@ -2,7 +2,7 @@
 //! `pinsight::vision::synth_envelope`, inspects them in parallel and prints
 //! the overall figures and, per factor, where the wrong verdicts sit.
 //!
-//!   cargo run --release --example eval_envelope -- [N] [FIRST_SEED] [--save DIR] [--list]
+//!   cargo run --release --example eval_envelope -- [N] [FIRST_SEED] [--save DIR] [--list] [--view side|top]
 //!
 //! `--save DIR` writes each wrongly judged image (PNG, 16-bit where the
 //! case was), its truth and its recipe for a closer look; `--list` prints
