@@ -79,18 +79,17 @@ pub(super) fn measure_bar<P: Px>(
     };
     let ymid = (ya + yb) / 2;
     let whole = mean_prof(ya, yb);
-    let (Some((l, r)), Some((l1, r1)), Some((l2, r2))) = (
-        bar_edges(&whole),
-        bar_edges(&mean_prof(ya, ymid)),
-        bar_edges(&mean_prof(ymid, yb)),
-    ) else {
-        return None;
-    };
+    let (l, r) = bar_edges(&whole)?;
     let contrast = bar_contrast(&whole, l, r);
     let mx = xa as f64 + 0.5 * (l + r);
     // Centres of the halves, at their mean rows, relative to the
     // perpendicular through the whole bar's centre.
-    let lean = (0.5 * (l2 + r2) - 0.5 * (l1 + r1)) / (0.5 * (yb - ya) as f64);
+    let lean = lean_of(
+        0.5 * (l + r),
+        bar_edges(&mean_prof(ya, ymid)).map(|(a, b)| 0.5 * (a + b)),
+        bar_edges(&mean_prof(ymid, yb)).map(|(a, b)| 0.5 * (a + b)),
+        (yb - ya) as f64,
+    );
     let perp = fit::Line {
         a: mx + line.b * ym,
         b: -line.b,
@@ -119,6 +118,26 @@ pub(super) fn measure_bar<P: Px>(
         tip,
         contrast,
     })
+}
+
+/// The lean (px across per px along) of a bar whose middle part, `len` px
+/// long, is centred at `whole` and its upper and lower halves at `upper`
+/// and `lower`. A half holds half the rows of the whole, so its mean
+/// profile is √2 noisier, and under a dim backlight its edges were
+/// sometimes not found where the whole bar's were (Rust 890 535, 890 666,
+/// 900 864: noise 9–14 DN, blur 2–2.4 px; the pin was then dropped and
+/// read missing). The whole's centre is the mean of the halves' (it lies
+/// at their mean row), so a lost half is stood in for by its reflection
+/// of the other through the whole's centre; with both lost the bar is
+/// taken as standing perpendicular, as an unbent pin does.
+fn lean_of(whole: f64, upper: Option<f64>, lower: Option<f64>, len: f64) -> f64 {
+    let (c1, c2) = match (upper, lower) {
+        (Some(a), Some(b)) => (a, b),
+        (Some(a), None) => (a, 2.0 * whole - a),
+        (None, Some(b)) => (2.0 * whole - b, b),
+        (None, None) => return 0.0,
+    };
+    (c2 - c1) / (0.5 * len)
 }
 
 /// The bar's interior (inside its half-level edges `l`, `r`, a pixel in
