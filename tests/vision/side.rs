@@ -11,8 +11,8 @@ use crate::common;
 /// bar was found, and its edges across the mean profile of its middle
 /// part, but not across one of that part's halves (√2 noisier), which
 /// only tell whether the pin leans; the bar was dropped, and the second
-/// look at its position failed the same way. The lost half now stands in
-/// as the other's reflection through the whole's centre
+/// look at its position failed the same way. A bar found as a blob is
+/// now kept with a half lost, taken as standing perpendicular
 /// (`side_bar::lean_of`).
 #[test]
 fn a_good_pin_whose_half_profile_is_lost_in_the_noise_is_not_missing() {
