@@ -2,7 +2,12 @@
 //! `pinsight::vision::synth_envelope`, inspects them in parallel and prints
 //! the overall figures and, per factor, where the wrong verdicts sit.
 //!
-//!   cargo run --release --example eval_envelope -- [N] [FIRST_SEED] [--save DIR] [--list]
+//!   cargo run --release --example eval_envelope -- [N] [FIRST_SEED] [--save DIR] [--list] [--view side|top]
+//!
+//! `--view side` (or `top`) judges only the cases drawn with that view,
+//! skipping the others before they are rendered: the side views are a
+//! minority of the draws, and a change to their pipeline is measured on
+//! them alone.
 //!
 //! `--save DIR` writes each wrongly judged image (PNG, 16-bit where the
 //! case was), its truth and its recipe for a closer look; `--list` prints
@@ -38,6 +43,11 @@ fn main() {
         .map(std::path::PathBuf::from);
     let list = args.iter().any(|a| a == "--list");
     let bound = args.iter().any(|a| a == "--bound");
+    let view: Option<String> = args
+        .iter()
+        .position(|a| a == "--view")
+        .and_then(|i| args.get(i + 1))
+        .map(|s| s.to_lowercase());
     if let Some(seed) = args
         .iter()
         .position(|a| a == "--show")
@@ -53,8 +63,13 @@ fn main() {
     let t0 = Instant::now();
     let outcomes: Vec<Outcome> = (first..first + n)
         .into_par_iter()
-        .map(|seed| {
+        .filter_map(|seed| {
             let case = EnvelopeCase::draw(seed);
+            if let Some(v) = &view
+                && format!("{:?}", case.factors.view).to_lowercase() != *v
+            {
+                return None;
+            }
             let r = case.render().expect("render");
             let t = Instant::now();
             let res =
@@ -124,7 +139,7 @@ fn main() {
                     toml::to_string(&case.recipe).unwrap_or_default(),
                 );
             }
-            o
+            Some(o)
         })
         .collect();
     let wall = t0.elapsed().as_secs_f64();

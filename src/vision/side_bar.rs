@@ -16,6 +16,9 @@ pub(super) struct BarEnd {
     /// The bar's level over its middle part above the background beside
     /// it (sign space: bar high), in the image's units.
     pub contrast: f32,
+    /// Whether both halves of the middle part gave their edges (so its
+    /// lean was measured, not assumed).
+    pub both_halves: bool,
 }
 
 /// Where to measure one bar: its columns `x0..=x1` (full-resolution px),
@@ -79,18 +82,21 @@ pub(super) fn measure_bar<P: Px>(
     };
     let ymid = (ya + yb) / 2;
     let whole = mean_prof(ya, yb);
-    let (Some((l, r)), Some((l1, r1)), Some((l2, r2))) = (
-        bar_edges(&whole),
-        bar_edges(&mean_prof(ya, ymid)),
-        bar_edges(&mean_prof(ymid, yb)),
-    ) else {
-        return None;
-    };
+    let (l, r) = bar_edges(&whole)?;
     let contrast = bar_contrast(&whole, l, r);
     let mx = xa as f64 + 0.5 * (l + r);
     // Centres of the halves, at their mean rows, relative to the
     // perpendicular through the whole bar's centre.
-    let lean = (0.5 * (l2 + r2) - 0.5 * (l1 + r1)) / (0.5 * (yb - ya) as f64);
+    let halves = (
+        bar_edges(&mean_prof(ya, ymid)),
+        bar_edges(&mean_prof(ymid, yb)),
+    );
+    let both_halves = halves.0.is_some() && halves.1.is_some();
+    let lean = lean_of(
+        halves.0.map(|(a, b)| 0.5 * (a + b)),
+        halves.1.map(|(a, b)| 0.5 * (a + b)),
+        (yb - ya) as f64,
+    );
     let perp = fit::Line {
         a: mx + line.b * ym,
         b: -line.b,
@@ -118,7 +124,26 @@ pub(super) fn measure_bar<P: Px>(
         width_px,
         tip,
         contrast,
+        both_halves,
     })
+}
+
+/// The lean (px across per px along) of a bar whose middle part, `len` px
+/// long, has its upper and lower halves centred at `upper` and `lower`.
+/// A half holds half the rows of the whole, so its mean profile is √2
+/// noisier, and under a dim backlight its edges were sometimes not found
+/// where the whole bar's were (Rust 890 535, 890 666, 900 864: noise
+/// 9–14 DN, blur 2–2.4 px); the pin was then dropped and read missing.
+/// With a half lost the bar is taken as standing perpendicular, as an
+/// unbent pin does. The lost half's reflection of the other through the
+/// whole's centre was tried first: one half's noise doubled passed the
+/// lean test, the axis leaned off the pin, and good Python pins read high
+/// (590 048).
+fn lean_of(upper: Option<f64>, lower: Option<f64>, len: f64) -> f64 {
+    match (upper, lower) {
+        (Some(a), Some(b)) => (b - a) / (0.5 * len),
+        _ => 0.0,
+    }
 }
 
 /// The bar's interior (inside its half-level edges `l`, `r`, a pixel in
@@ -195,7 +220,10 @@ pub(super) fn look_again<P: Px>(
     let e = measure_bar(plane, sign, line, &win)?;
     let w_ok = e.width_px >= 0.5 * row.width_px && e.width_px <= 1.6 * row.width_px;
     let c_ok = row.contrast > 0.0 && e.contrast >= LOOK_AGAIN_MIN_CONTRAST * row.contrast;
-    (w_ok && c_ok).then_some(e)
+    // No blob stood here, so nothing but this profile says a pin does:
+    // both halves must show it (a structure at a truly missing pin's
+    // position whose one half gave edges read bent, Python 650 354).
+    (w_ok && c_ok && e.both_halves).then_some(e)
 }
 
 #[cfg(test)]

@@ -18,4 +18,5 @@ mod fixtures;
 mod interop;
 mod one_tip;
 mod python_envelope;
+mod side;
 mod synth;
