@@ -134,6 +134,40 @@ pub(crate) const DIM_TIP_ON_POSITION: f64 = 0.5;
 /// ... the most elongated.
 pub(crate) const DIM_TIP_MAX_ELONGATION: f64 = 2.0;
 
+/// A blob on a position that is not tip-like and whose brightest part
+/// stays at the housing's level is no tip, wherever it lies. An empty
+/// clearance hole stands on the far side of the housing from the tips, so
+/// the housing around it stands out of the coarse top-hat as a ring (under
+/// noise, a mask many tips large that runs into its window), and its disc
+/// energy, taken against the coarse background that the hole's light
+/// shifts, can read a good fraction of a tip's (Rust 820 574: 0.60 of the
+/// neighbours', its level 0.14 of the local tip level; Python 650 356: a
+/// bright part, read damaged). A tip, even a damaged one, must reach
+/// [`DIM_TIP_MIN_LEVEL`] of that level ([`dim_tip_on_position`]); the
+/// damaged tips read near the area limit on the tuning sets (Rust 840 621,
+/// 840 921, 860 326, 900 019, 900 286) stand 0.54–0.89. Returns the level
+/// and the reason the pin reads missing.
+pub(crate) fn housing_not_tip(
+    c: &Candidate,
+    levels: &LocalLevels,
+    tip_px: f64,
+) -> Option<(f64, String)> {
+    let m = &c.m;
+    let rho = levels
+        .expected(m.x, m.y)
+        .map(|(t, b)| contrast_ratio(m.hi, t, b))?;
+    (!c.pinlike && rho < DIM_TIP_MIN_LEVEL).then(|| {
+        (
+            rho,
+            format!(
+                "no tip at the position: the blob there is not tip-like (area {:.2} × nominal, elongation {:.1}) and reaches only {rho:.2} of the local tip level (a tip, even a damaged one, reaches ≥ {DIM_TIP_MIN_LEVEL}): the housing around an empty hole",
+                m.area_px / tip_px,
+                m.elongation
+            ),
+        )
+    })
+}
+
 /// A blob assigned to a position that is not tip-like (area, elongation)
 /// and lies more than this many tip widths from it is outside the tip's
 /// clearance hole (≈ 0.6–0.7 tip widths in radius): not the pin, which

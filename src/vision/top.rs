@@ -19,7 +19,8 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, area_ratio_of,
-    contrast_ratio, core_contrast, dim_tip_on_position, neighbour_medians, snr_of, tip_disc_radius,
+    contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip, neighbour_medians, snr_of,
+    tip_disc_radius,
 };
 use super::top_candidates::{
     add_faint_debris, faint_tips_to_add, last_resort_search, measure_candidates,
@@ -673,6 +674,11 @@ pub fn inspect_top<P: Px>(
                 m.area_px / tip_px,
                 m.elongation
             ));
+        } else if let Some((rho, why)) =
+            pos_cand[pi].and_then(|ci| housing_not_tip(&cands[ci], &levels, tip_px))
+        {
+            pr.contrast_ratio = Some(rho);
+            pr.reason = Some(why);
         } else if let Some(ci) = pos_cand[pi] {
             let m = &cands[ci].m;
             let (du, dv) = sim.to_part_axes(m.x - nx, m.y - ny);

@@ -182,3 +182,29 @@ fn pins_off_centre_under_blur_are_measured_with_the_parts_blur() {
         assert_eq!(p.status, status, "{seed}: {pos:?}");
     }
 }
+
+/// A missing pin of a dark, blurred part must not read ok (Rust 820 574:
+/// round 2 × 2, 8.3 px tips, blur 2.4, pin (0,1) missing). Its empty
+/// clearance hole is brighter than the housing, so the housing around it
+/// became a coarse candidate: a noise-clumped mask 14 tips large running
+/// into its window, not tip-like, whose brightest part reaches only 0.14 of
+/// the local tip level; its disc energy against the coarse background (which
+/// the hole's light lifts) read 0.60 of the neighbours', just over the 0.6
+/// limit, and the part passed. A blob that is not tip-like and stays at the
+/// housing's level is no tip (`tip_levels::housing_not_tip`).
+#[test]
+fn a_missing_pins_bright_hole_under_blur_is_not_a_tip() {
+    use pinsight::vision::PinStatus;
+    let (case, r, ins) = common::envelope_case(820_574);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict wrong: {:?}", c.status_mismatches);
+    let p = ins
+        .pins
+        .iter()
+        .find(|p| (p.row, p.col) == (0, 1))
+        .expect("the pin is inspected");
+    assert_eq!(p.status, PinStatus::Missing, "{:?}", p.reason);
+    for p in ins.pins.iter().filter(|p| (p.row, p.col) != (0, 1)) {
+        assert_eq!(p.status, PinStatus::Ok, "{:?}", (p.row, p.col));
+    }
+}
