@@ -28,6 +28,27 @@ fn judge(seed: u64) -> (bool, usize, f64) {
     )
 }
 
+/// Inspects one case and asserts its verdict is right: (the inspection,
+/// how many pin statuses are wrong).
+fn with_verdict_right(seed: u64) -> (pinsight::vision::Inspection, usize) {
+    let (case, r, ins) = common::envelope_case(seed);
+    let c = r.compare(&case.factors, &ins);
+    assert!(
+        c.verdict_ok,
+        "{seed}: verdict wrong: {:?}",
+        c.status_mismatches
+    );
+    (ins, c.status_mismatches.len())
+}
+
+/// The inspected pin at `pos` (row, column).
+fn pin_at(ins: &pinsight::vision::Inspection, pos: (u32, u32)) -> &pinsight::vision::PinResult {
+    ins.pins
+        .iter()
+        .find(|p| (p.row, p.col) == pos)
+        .expect("the pin is inspected")
+}
+
 /// A bright 1 × 3 part with both end pins missing (840 221: 35 px tips):
 /// the one tip left is no lattice, and the search's best lattice was
 /// texture at a fifth of the tip's width, where no tip-sized blob stood.
@@ -95,24 +116,13 @@ fn a_bent_middle_pin_of_three_is_placed_by_a_two_step_housing_edge() {
 #[test]
 fn good_pins_off_centre_in_their_holes_under_blur_are_not_bent() {
     for (seed, pos) in [(860_040u64, (0u32, 1u32)), (840_401, (0, 0))] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(
-            c.verdict_ok,
-            "{seed}: verdict wrong: {:?}",
-            c.status_mismatches
+        let (ins, wrong) = with_verdict_right(seed);
+        assert_eq!(wrong, 0, "{seed}: pin statuses wrong");
+        assert_eq!(
+            pin_at(&ins, pos).status,
+            pinsight::vision::PinStatus::Ok,
+            "{seed}: {pos:?}"
         );
-        assert!(
-            c.status_mismatches.is_empty(),
-            "{seed}: pin statuses wrong: {:?}",
-            c.status_mismatches
-        );
-        let p = ins
-            .pins
-            .iter()
-            .find(|p| (p.row, p.col) == pos)
-            .expect("the pin is inspected");
-        assert_eq!(p.status, pinsight::vision::PinStatus::Ok, "{seed}: {pos:?}");
     }
 }
 
@@ -133,20 +143,9 @@ fn good_pins_under_noise_as_strong_as_their_contrast_are_not_damaged_or_missing(
         (840_364, [(0, 1), (0, 8)]),
         (830_795, [(0, 12), (0, 12)]),
     ] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(
-            c.verdict_ok,
-            "{seed}: verdict wrong: {:?}",
-            c.status_mismatches
-        );
+        let (ins, _) = with_verdict_right(seed);
         for pos in pos {
-            let p = ins
-                .pins
-                .iter()
-                .find(|p| (p.row, p.col) == pos)
-                .expect("the pin is inspected");
-            assert_eq!(p.status, PinStatus::Ok, "{seed}: {pos:?}");
+            assert_eq!(pin_at(&ins, pos).status, PinStatus::Ok, "{seed}: {pos:?}");
         }
     }
 }
@@ -167,19 +166,8 @@ fn pins_off_centre_under_blur_are_measured_with_the_parts_blur() {
         (830_116, (0, 1), PinStatus::Bent),
         (860_330, (0, 1), PinStatus::Ok),
     ] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(
-            c.verdict_ok,
-            "{seed}: verdict wrong: {:?}",
-            c.status_mismatches
-        );
-        let p = ins
-            .pins
-            .iter()
-            .find(|p| (p.row, p.col) == pos)
-            .expect("the pin is inspected");
-        assert_eq!(p.status, status, "{seed}: {pos:?}");
+        let (ins, _) = with_verdict_right(seed);
+        assert_eq!(pin_at(&ins, pos).status, status, "{seed}: {pos:?}");
     }
 }
 
@@ -195,14 +183,8 @@ fn pins_off_centre_under_blur_are_measured_with_the_parts_blur() {
 #[test]
 fn a_missing_pins_bright_hole_under_blur_is_not_a_tip() {
     use pinsight::vision::PinStatus;
-    let (case, r, ins) = common::envelope_case(820_574);
-    let c = r.compare(&case.factors, &ins);
-    assert!(c.verdict_ok, "verdict wrong: {:?}", c.status_mismatches);
-    let p = ins
-        .pins
-        .iter()
-        .find(|p| (p.row, p.col) == (0, 1))
-        .expect("the pin is inspected");
+    let (ins, _) = with_verdict_right(820_574);
+    let p = pin_at(&ins, (0, 1));
     assert_eq!(p.status, PinStatus::Missing, "{:?}", p.reason);
     for p in ins.pins.iter().filter(|p| (p.row, p.col) != (0, 1)) {
         assert_eq!(p.status, PinStatus::Ok, "{:?}", (p.row, p.col));
