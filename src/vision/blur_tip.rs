@@ -29,6 +29,7 @@
 //! is symmetric too and does not move `c` to first order; what moved the
 //! centroid — the housing's light — is now part of the model.
 
+use super::blur_model::{Eval, NP, Params, Samples, evaluate, solve_sym};
 use super::fit::Similarity;
 use super::gray::{Plane, Px};
 use super::recipe::{PinShape, Recipe};
@@ -197,150 +198,6 @@ pub struct TipFit {
     pub rms: f64,
 }
 
-/// erf, Abramowitz & Stegun 7.1.26 (|error| < 1.5e-7): the model needs
-/// a few million evaluations per image, and this precision is far below
-/// the noise of any pixel.
-#[inline]
-pub(super) fn erf(x: f64) -> f64 {
-    let s = x.signum();
-    let x = x.abs();
-    let t = 1.0 / (1.0 + 0.327_591_1 * x);
-    let y = 1.0
-        - (((((1.061_405_429 * t - 1.453_152_027) * t) + 1.421_413_741) * t - 0.284_496_736) * t
-            + 0.254_829_592)
-            * t
-            * (-x * x).exp();
-    s * y
-}
-
-/// A blurred centred interval [−h, h] at u: ½ [erf((h − u)/√2σ) + erf((h + u)/√2σ)].
-#[inline]
-fn band(u: f64, h: f64, k: f64) -> f64 {
-    0.5 * (erf((h - u) * k) + erf((h + u) * k))
-}
-
-struct Samples {
-    /// Pixel positions relative to the hole centre, in the part's axes.
-    u: Vec<f64>,
-    v: Vec<f64>,
-    /// Positions relative to the hole centre, image axes (background plane).
-    x: Vec<f64>,
-    y: Vec<f64>,
-    val: Vec<f64>,
-}
-
-/// Non-linear parameters: tip centre (part axes, relative to the hole
-/// centre), tip half-width, hole half-width, σ.
-type Params = [f64; 5];
-
-fn shape(round: bool, du: f64, dv: f64, h: f64, k: f64) -> f64 {
-    if round {
-        let r = du.hypot(dv);
-        band(r, h, k)
-    } else {
-        band(du, h, k) * band(dv, h, k)
-    }
-}
-
-/// Residuals of the linear least-squares solution for `p`; returns the
-/// residual vector, the sum of squares and the tip level.
-fn residuals(s: &Samples, round: bool, p: &Params, out: &mut Vec<f64>) -> Option<(f64, f64)> {
-    let k = std::f64::consts::FRAC_1_SQRT_2 / p[4].max(1e-3);
-    let n = s.val.len();
-    // Columns: 1, x, y, hole, tip.
-    const M: usize = 5;
-    let mut cols: [Vec<f64>; 2] = [Vec::with_capacity(n), Vec::with_capacity(n)];
-    let mut ata = [[0f64; M]; M];
-    let mut aty = [0f64; M];
-    // The tip occludes the hole and, where it stands past the hole's rim,
-    // the housing: the scene is housing + (hole − housing)·[H ∪ T] +
-    // (tip − hole)·[T], and [H ∪ T] = [H] + [T] − [H ∩ T]. Square: H ∩ T
-    // is a rectangle (both in the part's axes), blurred exactly; round:
-    // the blurred lens is taken as the smaller of the two blurred discs
-    // (exact where either edge is sharp or far).
-    let (w, h) = (p[2], p[3]);
-    let iu = (p[0] - w).max(-h)..(p[0] + w).min(h);
-    let iv = (p[1] - w).max(-h)..(p[1] + w).min(h);
-    let interval = |x: f64, r: &std::ops::Range<f64>| {
-        if r.end > r.start {
-            0.5 * (erf((r.end - x) * k) - erf((r.start - x) * k))
-        } else {
-            0.0
-        }
-    };
-    for i in 0..n {
-        let hole = shape(round, s.u[i], s.v[i], h, k);
-        let tip = shape(round, s.u[i] - p[0], s.v[i] - p[1], w, k);
-        let both = if round {
-            hole.min(tip)
-        } else {
-            interval(s.u[i], &iu) * interval(s.v[i], &iv)
-        };
-        let hole = hole + tip - both;
-        cols[0].push(hole);
-        cols[1].push(tip);
-        let a = [1.0, s.x[i], s.y[i], hole, tip];
-        for r in 0..M {
-            aty[r] += a[r] * s.val[i];
-            for c in r..M {
-                ata[r][c] += a[r] * a[c];
-            }
-        }
-    }
-    for r in 0..M {
-        for c in 0..r {
-            ata[r][c] = ata[c][r];
-        }
-    }
-    let coef = solve_sym(ata, aty)?;
-    out.clear();
-    let mut ss = 0.0;
-    for i in 0..n {
-        let m = coef[0]
-            + coef[1] * s.x[i]
-            + coef[2] * s.y[i]
-            + coef[3] * cols[0][i]
-            + coef[4] * cols[1][i];
-        let r = s.val[i] - m;
-        ss += r * r;
-        out.push(r);
-    }
-    Some((ss, coef[4]))
-}
-
-/// Solves a small symmetric positive (semi-)definite system by Gaussian
-/// elimination with partial pivoting; `None` when singular.
-fn solve_sym<const M: usize>(mut a: [[f64; M]; M], mut b: [f64; M]) -> Option<[f64; M]> {
-    let scale = (0..M)
-        .map(|i| a[i][i].abs())
-        .fold(0.0, f64::max)
-        .max(1e-300);
-    for col in 0..M {
-        let piv = (col..M).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-12 * scale {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in col + 1..M {
-            let f = a[r][col] / a[col][col];
-            for c in col..M {
-                a[r][c] -= f * a[col][c];
-            }
-            b[r] -= f * b[col];
-        }
-    }
-    let mut x = [0f64; M];
-    for r in (0..M).rev() {
-        let mut acc = b[r];
-        for c in r + 1..M {
-            acc -= a[r][c] * x[c];
-        }
-        x[r] = acc / a[r][r];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
-}
-
 fn clamp_params(p: &mut Params, prior: &TipPrior) {
     let w0 = prior.half_w;
     p[2] = p[2].clamp(0.6 * w0, 1.5 * w0);
@@ -376,13 +233,7 @@ pub fn fit_tip<P: Px>(
         .ceil()
         .max(1.0) as usize;
     let (sn, cs) = prior.theta.sin_cos();
-    let mut s = Samples {
-        u: Vec::new(),
-        v: Vec::new(),
-        x: Vec::new(),
-        y: Vec::new(),
-        val: Vec::new(),
-    };
+    let mut s = Samples::default();
     for y in (y0..y1).step_by(stride) {
         for x in (x0..x1).step_by(stride) {
             let (dx, dy) = (x as f64 - hx, y as f64 - hy);
@@ -402,38 +253,28 @@ pub fn fit_tip<P: Px>(
         prior.sigma.max(0.5),
     ];
     clamp_params(&mut p, prior);
-    let mut res = Vec::new();
-    let (mut ss, mut a_tip) = residuals(&s, prior.round, &p, &mut res)?;
+    let fit_sigma = prior.fixed_sigma.is_none();
+    let mut cur = Eval::default();
+    let mut trial = Eval::default();
+    evaluate(&s, prior.round, &p, true, &mut cur)?;
     let mut lambda = 1e-3;
-    let mut jac: Vec<Vec<f64>> = vec![Vec::new(); 5];
-    let mut tmp = Vec::new();
     for _ in 0..15 {
-        // Forward-difference Jacobian of the (projected) residuals.
-        for (j, col) in jac.iter_mut().enumerate() {
-            if j == 4 && prior.fixed_sigma.is_some() {
-                col.clear();
-                col.resize(res.len(), 0.0);
-                continue;
-            }
-            let d = 1e-4 * (1.0 + p[j].abs());
-            let mut q = p;
-            q[j] += d;
-            residuals(&s, prior.round, &q, &mut tmp)?;
-            col.clear();
-            col.extend(tmp.iter().zip(&res).map(|(a, b)| (a - b) / d));
-        }
-        let mut jtj = [[0f64; 5]; 5];
-        let mut jtr = [0f64; 5];
-        for a in 0..5 {
-            for b in a..5 {
-                jtj[a][b] = jac[a].iter().zip(&jac[b]).map(|(x, y)| x * y).sum();
+        let mut jtj = [[0f64; NP]; NP];
+        let mut jtr = [0f64; NP];
+        for a in 0..NP {
+            for b in a..NP {
+                jtj[a][b] = cur.jac[a].iter().zip(&cur.jac[b]).map(|(x, y)| x * y).sum();
                 jtj[b][a] = jtj[a][b];
             }
-            jtr[a] = -jac[a].iter().zip(&res).map(|(x, y)| x * y).sum::<f64>();
+            jtr[a] = -cur.jac[a]
+                .iter()
+                .zip(&cur.res)
+                .map(|(x, y)| x * y)
+                .sum::<f64>();
         }
         // A held σ takes no step: its row and column are the identity's.
-        if prior.fixed_sigma.is_some() {
-            for a in 0..5 {
+        if !fit_sigma {
+            for a in 0..NP {
                 jtj[a][4] = 0.0;
                 jtj[4][a] = 0.0;
             }
@@ -452,18 +293,16 @@ pub fn fit_tip<P: Px>(
                 continue;
             };
             let mut q = p;
-            for i in 0..5 {
+            for i in 0..NP {
                 q[i] += step[i];
             }
             clamp_params(&mut q, prior);
-            if let Some((ss2, a2)) = residuals(&s, prior.round, &q, &mut tmp)
-                && ss2 < ss
-            {
+            // The trial carries its Jacobian: most trials are taken, and
+            // the columns' erf (the cost) are shared with it.
+            if evaluate(&s, prior.round, &q, true, &mut trial).is_some() && trial.ss < cur.ss {
                 step_len = (q[0] - p[0]).hypot(q[1] - p[1]);
                 p = q;
-                ss = ss2;
-                a_tip = a2;
-                std::mem::swap(&mut res, &mut tmp);
+                std::mem::swap(&mut cur, &mut trial);
                 lambda = (lambda * 0.3).max(1e-7);
                 improved = true;
                 break;
@@ -474,6 +313,7 @@ pub fn fit_tip<P: Px>(
             break;
         }
     }
+    let (ss, a_tip) = (cur.ss, cur.a_tip);
     if !(a_tip > 0.0) {
         return None;
     }
@@ -487,22 +327,4 @@ pub fn fit_tip<P: Px>(
         a_tip,
         rms: (ss / s.val.len() as f64).sqrt(),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn erf_matches_known_values() {
-        for (x, e) in [
-            (0.0, 0.0),
-            (0.5, 0.520_499_877_8),
-            (1.0, 0.842_700_792_9),
-            (2.0, 0.995_322_265),
-        ] {
-            assert!((erf(x) - e).abs() < 2e-7, "{x}");
-            assert!((erf(-x) + e).abs() < 2e-7, "{x}");
-        }
-    }
 }

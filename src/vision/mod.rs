@@ -32,6 +32,7 @@
 
 mod backlight;
 pub mod batch;
+mod blur_model;
 mod blur_tip;
 pub mod detect;
 pub mod envelope;

@@ -17,7 +17,7 @@
 //! The apex's offset from the crossing is then the same for every bar of
 //! the row.
 
-use super::blur_tip::erf;
+use super::blur_model::erf;
 use super::fit;
 use super::gray::{Plane, Px};
 
