@@ -248,21 +248,16 @@ pub(super) struct Eval {
     pub ss: f64,
     /// The tip's level above its hole's (sign space).
     pub a_tip: f64,
-    /// ∂res/∂p, a column per parameter (filled when asked for).
+    /// ∂res/∂p, a column per parameter.
     pub jac: [Vec<f64>; NP],
     /// Per sample: the shape columns and their derivatives (scratch).
     cols: Vec<(f64, f64, Params, Params)>,
 }
 
-/// Evaluates the model at `p` into `e`: residuals always, the Jacobian when
-/// `with_jacobian`. `None` when the linear levels are undetermined.
-pub(super) fn evaluate(
-    s: &Samples,
-    round: bool,
-    p: &Params,
-    with_jacobian: bool,
-    e: &mut Eval,
-) -> Option<()> {
+/// Evaluates the model at `p` into `e`, residuals and Jacobian: the
+/// columns' erf are the cost, and the Jacobian reuses them. `None` when the
+/// linear levels are undetermined.
+pub(super) fn evaluate(s: &Samples, round: bool, p: &Params, e: &mut Eval) -> Option<()> {
     let sigma = p[4].max(1e-3);
     let k = FRAC_1_SQRT_2 / sigma;
     let dk_dsigma = if p[4] > 1e-3 { -k / sigma } else { 0.0 };
@@ -300,9 +295,6 @@ pub(super) fn evaluate(
         e.res.push(r);
     }
     e.a_tip = coef[4];
-    if !with_jacobian {
-        return Some(());
-    }
     // d_j = (∂A/∂p_j) c per sample, then J_j = −P⊥ d_j = −(d_j − A g_j)
     // with g_j = (AᵀA)⁻¹ Aᵀ d_j.
     let d_of = |i: usize, j: usize| {
@@ -417,7 +409,7 @@ mod tests {
             let s = samples(round, &truth);
             let p: Params = [2.1, -1.7, 3.6, 5.1, 1.1];
             let mut e = Eval::default();
-            evaluate(&s, round, &p, true, &mut e).unwrap();
+            evaluate(&s, round, &p, &mut e).unwrap();
             assert!(e.ss > 1.0, "the point must not be the minimum");
             for j in 0..NP {
                 let h = 1e-5;
@@ -425,11 +417,11 @@ mod tests {
                 let (mut pa, mut pb) = (p, p);
                 pa[j] += h;
                 pb[j] -= h;
-                evaluate(&s, round, &pa, false, &mut a).unwrap();
-                evaluate(&s, round, &pb, false, &mut b).unwrap();
-                // Kaufman's Jacobian omits a term in the columns' span;
-                // compare what the fit uses: Jᵀr (exact) and the Jacobian
-                // projected onto the residual's complement of that span.
+                evaluate(&s, round, &pa, &mut a).unwrap();
+                evaluate(&s, round, &pb, &mut b).unwrap();
+                // Kaufman's Jacobian omits a term in the columns' span, to
+                // which the residual is orthogonal: compare what the fit
+                // steps along, the gradient Jᵀr, which is exact.
                 let num_grad: f64 = a
                     .res
                     .iter()

@@ -256,7 +256,7 @@ pub fn fit_tip<P: Px>(
     let fit_sigma = prior.fixed_sigma.is_none();
     let mut cur = Eval::default();
     let mut trial = Eval::default();
-    evaluate(&s, prior.round, &p, true, &mut cur)?;
+    evaluate(&s, prior.round, &p, &mut cur)?;
     let mut lambda = 1e-3;
     for _ in 0..15 {
         let mut jtj = [[0f64; NP]; NP];
@@ -297,9 +297,8 @@ pub fn fit_tip<P: Px>(
                 q[i] += step[i];
             }
             clamp_params(&mut q, prior);
-            // The trial carries its Jacobian: most trials are taken, and
-            // the columns' erf (the cost) are shared with it.
-            if evaluate(&s, prior.round, &q, true, &mut trial).is_some() && trial.ss < cur.ss {
+            // The trial carries its Jacobian: most trials are taken.
+            if evaluate(&s, prior.round, &q, &mut trial).is_some() && trial.ss < cur.ss {
                 step_len = (q[0] - p[0]).hypot(q[1] - p[1]);
                 p = q;
                 std::mem::swap(&mut cur, &mut trial);
