@@ -344,54 +344,29 @@ fn check(name: &str) {
     eprintln!("{name}: {trials} kills, {a} left A's output, {b} B's");
 }
 
-/// The cases that have a test below.
-const TESTED: [&str; 7] = [
-    "sweep",
-    "overlay",
-    "inspect",
-    "methods",
-    "calibrate",
-    "simulate",
-    "render",
-];
+/// One test per case, named after it, and the list of the cases tested.
+macro_rules! case_tests {
+    ($($name:ident),* $(,)?) => {
+        /// The cases that have a test below.
+        const TESTED: &[&str] = &[$(stringify!($name)),*];
+
+        mod leaves_the_old_or_the_new_output {
+            $(
+                #[test]
+                fn $name() {
+                    super::check(stringify!($name));
+                }
+            )*
+        }
+    };
+}
+
+case_tests!(
+    sweep, overlay, inspect, methods, calibrate, simulate, render
+);
 
 #[test]
 fn every_case_has_its_test() {
     let names: Vec<&str> = cases().iter().map(|c| c.name).collect();
-    assert_eq!(names, TESTED, "add a #[test] for each new case");
-}
-
-#[test]
-fn sweep_leaves_the_old_or_the_new_output() {
-    check("sweep");
-}
-
-#[test]
-fn overlay_leaves_the_old_or_the_new_output() {
-    check("overlay");
-}
-
-#[test]
-fn inspect_leaves_the_old_or_the_new_output() {
-    check("inspect");
-}
-
-#[test]
-fn methods_leaves_the_old_or_the_new_output() {
-    check("methods");
-}
-
-#[test]
-fn calibrate_leaves_the_old_or_the_new_output() {
-    check("calibrate");
-}
-
-#[test]
-fn simulate_leaves_the_old_or_the_new_output() {
-    check("simulate");
-}
-
-#[test]
-fn render_leaves_the_old_or_the_new_output() {
-    check("render");
+    assert_eq!(names, TESTED, "add each new case to case_tests!");
 }
