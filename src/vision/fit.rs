@@ -33,9 +33,18 @@ impl Similarity {
 
     /// Part-frame (mm) coordinates of an image point.
     pub fn inverse(&self, x: f64, y: f64) -> (f64, f64) {
+        self.inverse_map()(x, y)
+    }
+
+    /// [`Similarity::inverse`] with its sine and cosine taken once, for
+    /// loops over every pixel (the same arithmetic, so the same results).
+    pub fn inverse_map(&self) -> impl Fn(f64, f64) -> (f64, f64) + use<> {
         let (sn, cs) = self.theta.sin_cos();
-        let (dx, dy) = (x - self.tx, y - self.ty);
-        ((cs * dx + sn * dy) / self.s, (-sn * dx + cs * dy) / self.s)
+        let (tx, ty, s) = (self.tx, self.ty, self.s);
+        move |x, y| {
+            let (dx, dy) = (x - tx, y - ty);
+            ((cs * dx + sn * dy) / s, (-sn * dx + cs * dy) / s)
+        }
     }
 
     /// Rotates an image-axis vector into the part frame (no scaling).

@@ -36,7 +36,7 @@
 
 use super::detect::CoarseSearch;
 use super::fit::Similarity;
-use super::housing::rect_distance;
+use super::housing::outside_rect;
 use super::label;
 
 /// How far above the fixture's median top-hat (in robust σ of it) a blob's
@@ -97,11 +97,12 @@ pub(super) fn fixture_seeds(
     let r_se = (1.3 * pin_c).ceil().max(2.0) as usize;
     let open = super::morph::open_square(&smooth, w, h, r_se);
     let th: Vec<f32> = smooth.iter().zip(&open).map(|(a, b)| a - b).collect();
+    let to_part = sim.inverse_map();
     let on_fixture: Vec<bool> = (0..w * h)
         .map(|i| {
             let (x, y) = cs.coarse.to_full((i % w) as f64, (i / w) as f64);
-            let (u, v) = sim.inverse(x, y);
-            rect_distance(u, v, grid) > 0.0
+            let (u, v) = to_part(x, y);
+            outside_rect(u, v, grid)
         })
         .collect();
     let mut vals: Vec<f32> = (0..w * h)
