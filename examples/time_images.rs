@@ -3,6 +3,8 @@
 use pinsight::vision::{self, InspectOptions, Recipe, image_io};
 use std::time::Instant;
 fn main() {
+    // As `pinsight inspect` and `yield` run (src/allocator.rs).
+    pinsight::allocator::settle_for_a_batch();
     let a: Vec<String> = std::env::args().skip(1).collect();
     let r = Recipe::load(std::path::Path::new(&a[0])).unwrap();
     let bytes = std::fs::read(&a[1]).unwrap();

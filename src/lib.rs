@@ -24,6 +24,7 @@
 //! | [`plot`] | PNG charts with an embedded font (no system fonts needed) |
 //! | [`export`] | results in other tools' formats: MCAP that Foxglove shows (overlay, inspections, simulations) |
 //! | [`output`] | every file written: atomic single files, multi-file reports complete or unchanged |
+//! | [`allocator`] | the C allocator tuned per kind of run: a shift of following (flat memory) or a batch (no page faults per image) |
 //! | [`progress`] | progress and cancellation shared by batch bars and TUI gauges |
 //! | [`panes`] | view models: one pure function per pane from session state to plain data |
 //! | [`tui`] | the terminal front end (ratatui + crossterm), drawing view models only |
@@ -34,6 +35,7 @@
 // kernels index several arrays in lock step.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
+pub mod allocator;
 pub mod batch;
 pub mod cli;
 pub mod engine;

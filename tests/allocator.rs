@@ -1,4 +1,4 @@
-//! The shift settings of the C allocator (`live::allocator`), in a process
+//! The shift settings of the C allocator (`allocator`), in a process
 //! of their own: glibc's counters are process-wide, so no other test may
 //! allocate while this one reads them.
 
@@ -14,7 +14,7 @@ fn large_blocks_stay_mapped_after_large_frees() {
         eprintln!("MALLOC_MMAP_THRESHOLD_ is set by environment: skipped");
         return;
     }
-    pinsight::live::allocator::settle_for_a_shift();
+    pinsight::allocator::settle_for_a_shift();
     drop(std::hint::black_box(vec![1u8; 1 << 20]));
     // SAFETY: mallinfo2 only reads glibc's counters.
     let before = unsafe { libc::mallinfo2() }.hblkhd;
@@ -31,5 +31,5 @@ fn large_blocks_stay_mapped_after_large_frees() {
         after < during,
         "the freed block stayed mapped: {after} bytes"
     );
-    pinsight::live::allocator::give_back_free_room();
+    pinsight::allocator::give_back_free_room();
 }

@@ -95,6 +95,9 @@ pub fn main() -> ExitCode {
     // Starts the clock of PINSIGHT_MAX_WALL_S (if set).
     let _ = crate::sim::process_deadline();
     let cli = Cli::parse();
+    if is_batch(cli.command.as_ref()) {
+        crate::allocator::settle_for_a_batch();
+    }
     let result = match cli.command {
         None => tui::run_default(),
         Some(Command::Simulate(a)) => simulate::run(a),
@@ -127,6 +130,19 @@ pub fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// Whether the command runs to completion over its inputs (the C
+/// allocator is tuned for throughput, see [`crate::allocator`]); the TUI,
+/// `watch`, the demo and `rig-sim` follow a line for hours instead.
+fn is_batch(command: Option<&Command>) -> bool {
+    !matches!(
+        command,
+        None | Some(Command::Tui(_))
+            | Some(Command::Watch(_))
+            | Some(Command::Demo(_))
+            | Some(Command::RigSim(_))
+    )
 }
 
 #[cfg(test)]

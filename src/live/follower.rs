@@ -167,7 +167,7 @@ fn cycle_of_name(p: &Path) -> Option<u64> {
 
 impl Follower {
     pub fn new(inputs: FollowInputs) -> Self {
-        super::allocator::settle_for_a_shift();
+        crate::allocator::settle_for_a_shift();
         let alarms = Alarms::new(inputs.alarms.clone());
         let mut f = Follower {
             logs: Vec::new(),
@@ -335,7 +335,7 @@ impl Follower {
         }
         if self.last_trim.elapsed().as_secs() >= 60 {
             self.last_trim = Instant::now();
-            super::allocator::give_back_free_room();
+            crate::allocator::give_back_free_room();
         }
         // Folders: new images and new logs.
         let mut new_logs = Vec::new();

@@ -14,14 +14,12 @@
 //! - [`wake`]: when to poll: file-system events (`notify` with its
 //!   debouncer) or a fixed interval for network shares.
 //! - [`ring`]: the raw window and the shift's min/max history.
-//! - [`allocator`]: glibc tuned for a shift (fixed thresholds, two arenas).
 //! - [`sim`]: `pinsight rig-sim`, a rig writing a log in real time.
 //!
 //! Floor: below `engine` (which the faces reach it through), above `rig`,
 //! `process` and `vision`, whose analyses it runs unchanged.
 
 pub mod alarms;
-pub mod allocator;
 pub mod cycles;
 pub mod decode;
 pub mod events;

@@ -392,7 +392,7 @@ pub fn run(opts: &SimOptions, stop: &AtomicBool) -> Result<SimReport, String> {
     let started = Instant::now();
     // A rig writes for a shift too (run K: 44 MB with glibc's defaults
     // against 23–25 MB with these settings in run J).
-    super::allocator::settle_for_a_shift();
+    crate::allocator::settle_for_a_shift();
     let params = Params::paper();
     let geom = Geometry::of(&params);
     let tdc = geom.tdc_angle();

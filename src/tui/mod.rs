@@ -217,7 +217,7 @@ pub fn start_follow(
     crate::live::AlarmRules,
 )> {
     // Before the follower's thread exists, so its arena is one of the two.
-    crate::live::allocator::settle_for_a_shift();
+    crate::allocator::settle_for_a_shift();
     session.start_live(
         inputs.config.clone(),
         inputs
