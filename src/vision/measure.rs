@@ -460,12 +460,19 @@ pub fn measure_blob_split<P: Px>(
         let d = diamond_angle((y as f64 - b.cy) as f32, (x as f64 - b.cx) as f32);
         ((d * (SECTORS / 4) as f32) as usize).min(SECTORS - 1)
     };
+    // Each window pixel's sector, taken once (it is read three times more
+    // per pixel below).
+    let mut sector = vec![0u8; rw * rh];
     let mut outside: Vec<Vec<f32>> = vec![Vec::new(); SECTORS];
     for y in 0..rh {
         for x in 0..rw {
             let i = y * rw + x;
-            if win[i] != 0 && mask[i] == 0 {
-                outside[sector_of(x, y)].push(veff[i]);
+            if win[i] != 0 {
+                let s = sector_of(x, y);
+                sector[i] = s as u8;
+                if mask[i] == 0 {
+                    outside[s].push(veff[i]);
+                }
             }
         }
     }
@@ -491,11 +498,11 @@ pub fn measure_blob_split<P: Px>(
     let lo = saddle.unwrap_or(lo0);
     // Coverage of pixel i counted from `from` of the way between the local
     // background and `hi_cov` (0: the full range).
-    let coverage = |i: usize, x: usize, y: usize, from: f32| -> f64 {
+    let coverage = |i: usize, from: f32| -> f64 {
         if mask[i] != 0 && v[i] >= hi_cov {
             return 1.0;
         }
-        let l = lo_s[sector_of(x, y)];
+        let l = lo_s[sector[i] as usize];
         let l = l + from * (hi_cov - l);
         ((veff[i] - l) / (hi_cov - l).max(1e-6)).clamp(0.0, 1.0) as f64
     };
@@ -513,16 +520,16 @@ pub fn measure_blob_split<P: Px>(
         for x in 0..rw {
             let i = y * rw + x;
             if win[i] != 0 {
-                let wgt = coverage(i, x, y, 0.0);
+                let wgt = coverage(i, 0.0);
                 area += wgt;
                 edge += wgt * (1.0 - wgt);
                 let val = if mask[i] != 0 { v[i] } else { veff[i] };
-                energy += (val - lo_s[sector_of(x, y)]).max(0.0) as f64;
+                energy += (val - lo_s[sector[i] as usize]).max(0.0) as f64;
                 if loc == Localiser::Coverage {
                     sw += wgt;
                     swx += wgt * x as f64;
                     swy += wgt * y as f64;
-                    let cw = coverage(i, x, y, CENTRE_LEVEL);
+                    let cw = coverage(i, CENTRE_LEVEL);
                     hw += cw;
                     hwx += cw * x as f64;
                     hwy += cw * y as f64;
@@ -641,14 +648,19 @@ fn box3(v: &[f32], rw: usize, rh: usize) -> Vec<f32> {
 /// The indices of the 3×3 block around pixel `i` of a `rw`×`rh` window
 /// (the pixel itself included; cut at the window's edges), row by row.
 fn block3x3(i: usize, rw: usize, rh: usize) -> impl Iterator<Item = usize> {
-    let (x, y) = ((i % rw) as i64, (i / rw) as i64);
-    (-1..=1i64).flat_map(move |dy| {
-        (-1..=1i64).filter_map(move |dx| {
-            let (nx, ny) = (x + dx, y + dy);
-            let inside = nx >= 0 && ny >= 0 && nx < rw as i64 && ny < rh as i64;
-            inside.then(|| ny as usize * rw + nx as usize)
-        })
-    })
+    // The indices in row order, gathered on the stack: the ring growth
+    // above visits 9 neighbours of every frontier pixel, and a chain of
+    // iterator adapters there cost more than the work it feeds.
+    let (x, y) = (i % rw, i / rw);
+    let mut out = [0usize; 9];
+    let mut n = 0;
+    for ny in y.saturating_sub(1)..=(y + 1).min(rh - 1) {
+        for nx in x.saturating_sub(1)..=(x + 1).min(rw - 1) {
+            out[n] = ny * rw + nx;
+            n += 1;
+        }
+    }
+    out.into_iter().take(n)
 }
 
 #[cfg(test)]
