@@ -75,9 +75,17 @@ fn pass_vertical<const MAX: bool>(data: &mut [f32], w: usize, h: usize, r: usize
         f32::INFINITY
     };
     let m = h + 2 * r;
-    let mut g = vec![pad; m * w];
-    g[r * w..(r + h) * w].copy_from_slice(data);
-    let mut hh = g.clone();
+    // The padded column: r rows of `pad` each side (only the pads are
+    // filled; the image's rows are copied once into each buffer).
+    let padded = || {
+        let mut v = Vec::with_capacity(m * w);
+        v.resize(r * w, pad);
+        v.extend_from_slice(data);
+        v.resize(m * w, pad);
+        v
+    };
+    let mut g = padded();
+    let mut hh = padded();
     let mut b = 0;
     while b < m {
         let e = (b + win).min(m);

@@ -97,14 +97,16 @@ pub(super) fn fixture_seeds(
     let r_se = (1.3 * pin_c).ceil().max(2.0) as usize;
     let open = super::morph::open_square(&smooth, w, h, r_se);
     let th: Vec<f32> = smooth.iter().zip(&open).map(|(a, b)| a - b).collect();
+    // Row by row (an index's `i % w` and `i / w` cost more than the test).
     let to_part = sim.inverse_map();
-    let on_fixture: Vec<bool> = (0..w * h)
-        .map(|i| {
-            let (x, y) = cs.coarse.to_full((i % w) as f64, (i / w) as f64);
+    let mut on_fixture = Vec::with_capacity(w * h);
+    for yc in 0..h {
+        on_fixture.extend((0..w).map(|xc| {
+            let (x, y) = cs.coarse.to_full(xc as f64, yc as f64);
             let (u, v) = to_part(x, y);
             outside_rect(u, v, grid)
-        })
-        .collect();
+        }));
+    }
     let mut vals: Vec<f32> = (0..w * h)
         .filter(|&i| on_fixture[i])
         .map(|i| th[i])
