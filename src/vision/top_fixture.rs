@@ -97,16 +97,8 @@ pub(super) fn fixture_seeds(
     let r_se = (1.3 * pin_c).ceil().max(2.0) as usize;
     let open = super::morph::open_square(&smooth, w, h, r_se);
     let th: Vec<f32> = smooth.iter().zip(&open).map(|(a, b)| a - b).collect();
-    // Row by row (an index's `i % w` and `i / w` cost more than the test).
-    let to_part = sim.inverse_map();
-    let mut on_fixture = Vec::with_capacity(w * h);
-    for yc in 0..h {
-        on_fixture.extend((0..w).map(|xc| {
-            let (x, y) = cs.coarse.to_full(xc as f64, yc as f64);
-            let (u, v) = to_part(x, y);
-            outside_rect(u, v, grid)
-        }));
-    }
+    let to_full = |x, y| cs.coarse.to_full(x, y);
+    let on_fixture = outside_grid(w, h, &to_full, sim, grid);
     let mut vals: Vec<f32> = (0..w * h)
         .filter(|&i| on_fixture[i])
         .map(|i| th[i])
@@ -148,6 +140,73 @@ pub(super) fn fixture_seeds(
     out.into_iter().map(|(_, p)| p).collect()
 }
 
+/// Which pixels of a `w` × `h` image (whose pixel (x, y) sits at
+/// `to_full(x, y)` in the full frame, increasing in each coordinate) lie
+/// outside `grid` ([u0, u1, v0, v1], part frame, mm): `outside_rect` of
+/// `sim.inverse` of every pixel, a run per row (see [`monotone_run`]).
+fn outside_grid(
+    w: usize,
+    h: usize,
+    to_full: &dyn Fn(f64, f64) -> (f64, f64),
+    sim: &Similarity,
+    grid: [f64; 4],
+) -> Vec<bool> {
+    let to_part = sim.inverse_map();
+    let mut out = vec![true; w * h];
+    for yc in 0..h {
+        let uv = |xc: usize| {
+            let (x, y) = to_full(xc as f64, yc as f64);
+            to_part(x, y)
+        };
+        let tests: [&dyn Fn(usize) -> bool; 4] = [
+            &|xc| uv(xc).0 >= grid[0],
+            &|xc| uv(xc).0 <= grid[1],
+            &|xc| uv(xc).1 >= grid[2],
+            &|xc| uv(xc).1 <= grid[3],
+        ];
+        let (a, b) = tests.iter().fold((0, w), |(a, b), t| {
+            let (ta, tb) = monotone_run(w, t);
+            (a.max(ta), b.min(tb))
+        });
+        if a < b {
+            out[yc * w + a..yc * w + b].fill(false);
+        }
+    }
+    out
+}
+
+/// The run [a, b) of 0..n where `holds` is true, for a test that is
+/// monotone along the row (true on a prefix, a suffix, all or none).
+///
+/// Why a search: the fixture's mask asks of every coarse pixel whether it
+/// lies outside the grid's rectangle in the part frame. Along a row, each
+/// of the part-frame coordinates is monotone in x (every operation of
+/// [`Similarity::inverse_map`] is
+/// monotone in its one varying operand, rounding included), so each of the
+/// rectangle's four bounds holds on a prefix or a suffix, and the pixels
+/// inside on one run: found with O(log n) evaluations of the very
+/// expression a per-pixel test would evaluate, with the same answer.
+fn monotone_run(n: usize, holds: &dyn Fn(usize) -> bool) -> (usize, usize) {
+    if n == 0 {
+        return (0, 0);
+    }
+    let (first, last) = (holds(0), holds(n - 1));
+    if first == last {
+        return if first { (0, n) } else { (0, 0) };
+    }
+    // The first index where `holds` differs from `first`.
+    let (mut lo, mut hi) = (0usize, n - 1); // holds(lo) == first != holds(hi)
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if holds(mid) == first {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    if first { (0, hi) } else { (hi, n) }
+}
+
 /// How many robust σ `peak` at `at` stands above the residual `th` of the
 /// fixture around it: its median and 1.4826·MAD over the fixture's coarse
 /// pixels 1–4 tip widths (`pin_c`, coarse px) from `at`, the blob's own
@@ -183,4 +242,48 @@ fn local_sigmas(
     let mut dev: Vec<f32> = near.iter().map(|v| (v - med).abs()).collect();
     let sigma = 1.4826 * super::measure::percentile(&mut dev, 0.5);
     (peak - med) / sigma.max(1e-6)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The runs found by search are the per-pixel test, pixel for pixel,
+        /// at any rotation (both signs of sine and cosine), scale, offset and
+        /// grid, including grids wholly outside the image or covering it.
+        #[test]
+        fn outside_grid_is_the_per_pixel_test(
+            w in 1usize..60, h in 1usize..40, k in 1usize..8,
+            theta in -3.2f64..3.2, s in 2.0f64..80.0,
+            tx in -200.0f64..400.0, ty in -200.0f64..400.0,
+            u0 in -10.0f64..10.0, du in 0.0f64..12.0,
+            v0 in -10.0f64..10.0, dv in 0.0f64..12.0,
+        ) {
+            let sim = Similarity { s, theta, tx, ty };
+            let grid = [u0, u0 + du, v0, v0 + dv];
+            let kf = k as f64;
+            let to_full = |x: f64, y: f64| (x * kf + (kf - 1.0) / 2.0, y * kf + (kf - 1.0) / 2.0);
+            let got = outside_grid(w, h, &to_full, &sim, grid);
+            for y in 0..h {
+                for x in 0..w {
+                    let (fx, fy) = to_full(x as f64, y as f64);
+                    let (u, v) = sim.inverse(fx, fy);
+                    prop_assert_eq!(got[y * w + x], outside_rect(u, v, grid), "({}, {})", x, y);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn monotone_run_finds_prefixes_suffixes_and_the_empty_run() {
+        assert_eq!(monotone_run(10, &|i| i < 4), (0, 4));
+        assert_eq!(monotone_run(10, &|i| i >= 7), (7, 10));
+        assert_eq!(monotone_run(10, &|_| true), (0, 10));
+        assert_eq!(monotone_run(10, &|_| false), (0, 0));
+        assert_eq!(monotone_run(1, &|_| true), (0, 1));
+        assert_eq!(monotone_run(0, &|_| true), (0, 0));
+        assert_eq!(monotone_run(2, &|i| i == 1), (1, 2));
+    }
 }
