@@ -322,12 +322,6 @@ fn outermost_peak(g: &[f64], strong: f64) -> Option<usize> {
     Some(best)
 }
 
-/// Whether (u, v) lies outside `r` = [u0, u1, v0, v1], i.e.
-/// [`rect_distance`] > 0 without its square root (false for NaN, as there).
-pub(crate) fn outside_rect(u: f64, v: f64, r: [f64; 4]) -> bool {
-    u < r[0] || u > r[1] || v < r[2] || v > r[3]
-}
-
 /// Distance of (u, v) from the rectangle [u0, u1] × [v0, v1] (0 inside).
 pub(crate) fn rect_distance(u: f64, v: f64, r: [f64; 4]) -> f64 {
     let du = (r[0] - u).max(u - r[1]).max(0.0);

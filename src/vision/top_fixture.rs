@@ -36,7 +36,6 @@
 
 use super::detect::CoarseSearch;
 use super::fit::Similarity;
-use super::housing::outside_rect;
 use super::label;
 
 /// How far above the fixture's median top-hat (in robust σ of it) a blob's
@@ -142,8 +141,9 @@ pub(super) fn fixture_seeds(
 
 /// Which pixels of a `w` × `h` image (whose pixel (x, y) sits at
 /// `to_full(x, y)` in the full frame, increasing in each coordinate) lie
-/// outside `grid` ([u0, u1, v0, v1], part frame, mm): `outside_rect` of
-/// `sim.inverse` of every pixel, a run per row (see [`monotone_run`]).
+/// outside `grid` ([u0, u1, v0, v1], part frame, mm): whether
+/// `rect_distance` of `sim.inverse` of each pixel is positive, found as a
+/// run per row (see [`monotone_run`]).
 fn outside_grid(
     w: usize,
     h: usize,
@@ -270,7 +270,8 @@ mod tests {
                 for x in 0..w {
                     let (fx, fy) = to_full(x as f64, y as f64);
                     let (u, v) = sim.inverse(fx, fy);
-                    prop_assert_eq!(got[y * w + x], outside_rect(u, v, grid), "({}, {})", x, y);
+                    let want = crate::vision::housing::rect_distance(u, v, grid) > 0.0;
+                    prop_assert_eq!(got[y * w + x], want, "({}, {})", x, y);
                 }
             }
         }
