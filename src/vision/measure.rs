@@ -110,7 +110,7 @@ pub struct BlobMeasure {
     pub noise: f32,
     /// Σ (v − local level) over the coverage window: the blob's energy,
     /// which blur only spreads (sample units × px²). The top view replaces
-    /// it, for tips on grid positions under blur, by [`disc_energy`] inside
+    /// it, for tips on grid positions under blur, by [`super::disc::disc_energy`] inside
     /// a fixed disc.
     pub energy: f64,
     /// Edge spread, px: √π Σ w(1 − w) / perimeter (≈ the blur σ; about
@@ -592,45 +592,6 @@ pub fn measure_blob_split<P: Px>(
     })
 }
 
-/// A tip's energy inside a fixed disc: Σ (v − `level`) over the pixels
-/// around `c` (full-resolution px, `sign` space), each weighted by how
-/// much of it lies within radius `r` (a 1 px ramp across the rim). Unlike
-/// [`BlobMeasure::energy`] it is linear in the image and does not depend
-/// on a mask's extent, so noise only adds zero-mean scatter.
-pub fn disc_energy<P: Px>(plane: &Plane<P>, sign: f32, c: (f64, f64), r: f64, level: f32) -> f64 {
-    let mut e = 0f64;
-    for_each_in_disc(plane, sign, c, r, |w, v| e += w * (v - level) as f64);
-    e
-}
-
-/// Calls `f(weight, value)` for every pixel of the disc of radius `r`
-/// around `c` (`sign` space), weighted by how much of it lies within `r`
-/// (a 1 px ramp across the rim); pixels beyond the image are left out.
-pub(crate) fn for_each_in_disc<P: Px>(
-    plane: &Plane<P>,
-    sign: f32,
-    c: (f64, f64),
-    r: f64,
-    mut f: impl FnMut(f64, f32),
-) {
-    let (Some(xm), Some(ym)) = (plane.w.checked_sub(1), plane.h.checked_sub(1)) else {
-        return;
-    };
-    let x0 = (c.0 - r - 1.0).floor().max(0.0) as usize;
-    let y0 = (c.1 - r - 1.0).floor().max(0.0) as usize;
-    let x1 = ((c.0 + r + 1.0).ceil() as usize).min(xm);
-    let y1 = ((c.1 + r + 1.0).ceil() as usize).min(ym);
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            let d = (x as f64 - c.0).hypot(y as f64 - c.1);
-            let w = (r + 0.5 - d).clamp(0.0, 1.0);
-            if w > 0.0 {
-                f(w, sign * plane.at(x, y));
-            }
-        }
-    }
-}
-
 /// 3 × 3 mean of a `rw` × `rh` window (cut at its edges).
 fn box3(v: &[f32], rw: usize, rh: usize) -> Vec<f32> {
     (0..rw * rh)
@@ -666,6 +627,7 @@ fn block3x3(i: usize, rw: usize, rh: usize) -> impl Iterator<Item = usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::vision::disc::disc_energy;
 
     /// A 40 × 40 window: housing (level 40) below y = 20, a brighter
     /// fixture (150) above; `blob` adds a 6 × 6 square of level 220

@@ -35,6 +35,7 @@ pub mod batch;
 mod blur_model;
 mod blur_tip;
 pub mod detect;
+pub mod disc;
 pub mod envelope;
 pub mod error;
 pub mod fit;

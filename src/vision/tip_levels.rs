@@ -184,7 +184,7 @@ pub(crate) const BLUR_RELATIVE: f64 = 0.08;
 pub(crate) const DISC_BLUR_SIGMAS: f64 = 2.0;
 
 /// Radius (px) of the fixed disc in which a blurred tip's energy is summed
-/// ([`super::measure::disc_energy`]): the nominal tip's outer radius (a
+/// ([`super::disc::disc_energy`]): the nominal tip's outer radius (a
 /// square's half-diagonal) plus `DISC_BLUR_SIGMAS` blur σ, at most half
 /// the smallest pitch so that no neighbour's light is counted.
 pub(crate) fn tip_disc_radius(
@@ -289,7 +289,7 @@ pub(crate) fn snr_of(m: &BlobMeasure) -> f64 {
 /// holds no pixel.
 pub(crate) fn disc_mean<P: Px>(plane: &Plane<P>, sign: f32, c: (f64, f64), r: f64) -> Option<f64> {
     let (mut sw, mut sv) = (0f64, 0f64);
-    super::measure::for_each_in_disc(plane, sign, c, r, |w, v| {
+    super::disc::for_each_in_disc(plane, sign, c, r, |w, v| {
         sw += w;
         sv += w * v as f64;
     });

@@ -535,7 +535,7 @@ pub fn inspect_top<P: Px>(
     if blurred {
         for &ci in pos_cand.iter().flatten() {
             let m = &mut cands[ci].m;
-            m.energy = measure::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
+            m.energy = super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
         }
     }
     let area_of =
@@ -603,7 +603,7 @@ pub fn inspect_top<P: Px>(
             continue;
         };
         if blurred {
-            m.energy = measure::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
+            m.energy = super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
         }
         let rho = contrast_ratio(m.hi, t_exp, b_exp);
         let snr = snr_of(&m);

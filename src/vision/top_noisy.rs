@@ -8,14 +8,13 @@
 //! neighbours' (read damaged), and on an empty grid position the second
 //! look's mask runs into its window's border and the tip is read missing
 //! although its light is all there. The tip's energy inside a fixed disc
-//! ([`super::measure::disc_energy`]) is linear in the image: noise adds
+//! ([`super::disc::disc_energy`]) is linear in the image: noise adds
 //! zero-mean scatter to it (σ ≈ 0.05–0.09 of a tip's energy there) and no
 //! bias, so it is what decides in both cases.
 
 use super::blur_tip;
 use super::fit::Similarity;
 use super::gray::{Plane, Px};
-use super::measure;
 use super::recipe::Recipe;
 
 /// The least disc energy, as a fraction of the neighbouring tips' median,
@@ -63,7 +62,7 @@ impl<P: Px> EmptyLook<'_, P> {
         if !(energy > 0.0) {
             return None;
         }
-        let e0 = measure::disc_energy(self.plane, self.sign, hole, self.disc_r, level);
+        let e0 = super::disc::disc_energy(self.plane, self.sign, hole, self.disc_r, level);
         let sigma = noise as f64 * (std::f64::consts::PI * self.disc_r * self.disc_r).sqrt();
         if e0 < WHOLE_TIP_ENERGY * energy || e0 < WHOLE_TIP_SIGMAS * sigma {
             return None;
@@ -79,7 +78,7 @@ impl<P: Px> EmptyLook<'_, P> {
         if (f.x - hole.0).hypot(f.y - hole.1) > super::tip_levels::OFF_HOLE * self.pin_px {
             return None;
         }
-        let e = measure::disc_energy(self.plane, self.sign, (f.x, f.y), self.disc_r, level);
+        let e = super::disc::disc_energy(self.plane, self.sign, (f.x, f.y), self.disc_r, level);
         Some(((f.x, f.y), e / energy))
     }
 }
