@@ -17,8 +17,8 @@
 //! come from the heap, but each time the heap's top is freed beyond the trim
 //! threshold glibc gives it back, and the next image faults every page in
 //! again: `pinsight yield --jobs 1` over 40 5 MP JPEGs took 126 000 page
-//! faults and 2.35 s, with 64 MB kept at the heap's top 4 000 and 1.62 s,
-//! its peak resident memory unchanged (25 MB; BENCHMARKS.md). So a batch
+//! faults, with these settings 4 000, and 0.81× the time; peak resident
+//! memory went from 26 to 30 MB (BENCHMARKS.md, "Cheaper passes"). So a batch
 //! keeps [`BATCH_TOP_PAD`] of free room at each heap's top, and takes
 //! blocks under [`BATCH_MMAP_THRESHOLD`] from the heap.
 //!

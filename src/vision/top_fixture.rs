@@ -158,11 +158,13 @@ fn outside_grid(
             let (x, y) = to_full(xc as f64, yc as f64);
             to_part(x, y)
         };
+        // Written as "not beyond the bound", as `rect_distance` reads it: a
+        // NaN coordinate counts as inside there, and so here.
         let tests: [&dyn Fn(usize) -> bool; 4] = [
-            &|xc| uv(xc).0 >= grid[0],
-            &|xc| uv(xc).0 <= grid[1],
-            &|xc| uv(xc).1 >= grid[2],
-            &|xc| uv(xc).1 <= grid[3],
+            &|xc| !(uv(xc).0 < grid[0]),
+            &|xc| !(uv(xc).0 > grid[1]),
+            &|xc| !(uv(xc).1 < grid[2]),
+            &|xc| !(uv(xc).1 > grid[3]),
         ];
         let (a, b) = tests.iter().fold((0, w), |(a, b), t| {
             let (ta, tb) = monotone_run(w, t);
@@ -275,6 +277,24 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_nan_similarity_leaves_every_pixel_inside_as_rect_distance_does() {
+        let sim = Similarity {
+            s: f64::NAN,
+            theta: 0.0,
+            tx: 0.0,
+            ty: 0.0,
+        };
+        let (u, v) = sim.inverse(3.0, 4.0);
+        assert!(!(crate::vision::housing::rect_distance(u, v, [0.0, 1.0, 0.0, 1.0]) > 0.0));
+        let k = |x: f64, y: f64| (x, y);
+        assert!(
+            outside_grid(5, 3, &k, &sim, [0.0, 1.0, 0.0, 1.0])
+                .iter()
+                .all(|&o| !o)
+        );
     }
 
     #[test]
