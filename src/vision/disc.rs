@@ -1,7 +1,7 @@
 //! A tip's energy inside a fixed disc, and the disc's pixels with their
 //! weights: a measure linear in the image, beside the mask-based ones of
-//! [`super::measure`], for judging tips under noise (`top_noisy`,
-//! `tip_levels`).
+//! [`super::measure`], for judging tips under blur and noise (`top`,
+//! `top_noisy`, `tip_levels`).
 
 use super::gray::{Plane, Px};
 
