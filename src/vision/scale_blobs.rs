@@ -6,6 +6,21 @@ use super::detect::{self, CoarseBlob, Smoothing};
 use super::gray::Coarse;
 use super::recipe::{PinShape, Recipe};
 
+/// The smallest share of a tip's area a blob of the search may have.
+const MIN_TIP_SHARE: f64 = 0.3;
+
+/// From this coarse factor up (tips tried ≥ 17.5 px wide) the usual
+/// passes grow a blob cut below [`MIN_TIP_SHARE`] of a tip to its half
+/// peak ([`detect::at_half_peak`]). At such factors a block averages 16
+/// pixels or more, so pixel noise no longer cuts cores: a core there is a
+/// tip under a noise floor that fixture texture, blotchy at the tips' own
+/// scale, lifted to the tips' peak (Python renderer seed 590 094: 41 px
+/// tips at contrast 0.32 came through as 0.2–0.3 of a tip, and a lattice
+/// of texture blobs at 10 px won the scale). Below it, noise cores
+/// grown to tip size formed false lattices (Rust seeds 910 317, 915 247
+/// lost pins), so small widths take blobs as found.
+const GROW_CORES_FROM_K: usize = 4;
+
 /// Smallest tip width tried, px.
 pub(super) const W_MIN: f64 = 3.5;
 
@@ -63,10 +78,10 @@ pub(super) fn tip_blobs(
 /// top-hat a few steps narrower still passes a tip whole and the larger
 /// blotches less. Its blobs are grown to half their peak
 /// ([`detect::at_half_peak`]): their cores clear the floor, and a core is
-/// no tip-sized blob. The usual passes (`w_search == w`) take blobs as
-/// found: growing them there too changed which lattice won on images
-/// judged right before (Rust 830 287, a 2 × 2 part with two pins missing,
-/// became an error).
+/// no tip-sized blob. The usual passes (`w_search == w`) grow only cores
+/// at large widths ([`GROW_CORES_FROM_K`]): growing every blob there
+/// changed which lattice won on images judged right before (Rust 830 287,
+/// a 2 × 2 part with two pins missing, became an error).
 pub(super) fn tip_blobs_searched_at(
     recipe: &Recipe,
     coarse: &Coarse,
@@ -77,7 +92,9 @@ pub(super) fn tip_blobs_searched_at(
     blobs_of(recipe, coarse, w_search, w, smoothing, w_search < w)
 }
 
-/// [`tip_blobs_searched_at`], its blobs grown to half their peak or not.
+/// [`tip_blobs_searched_at`], its blobs grown to half their peak
+/// (`grow`) or only its cores at the coarse factors of large tips
+/// ([`GROW_CORES_FROM_K`]).
 fn blobs_of(
     recipe: &Recipe,
     coarse: &Coarse,
@@ -89,34 +106,39 @@ fn blobs_of(
     let found = detect::search_coarse_smoothed(coarse, w_search, None, None, smoothing);
     let k = coarse.k as f64;
     let tip_area = area_of_width(w, recipe.pin_shape);
-    let grown;
-    let blobs: &[CoarseBlob] = if grow {
-        let reach = (1.5 * w / k).ceil() as usize;
-        let size = (coarse.w, coarse.h);
-        grown =
-            detect::grown_to_half_peak(&found.tophat, found.threshold, &found.blobs, size, reach);
-        &grown
-    } else {
-        &found.blobs
-    };
-    blobs
+    let reach = (1.5 * w / k).ceil() as usize;
+    let size = (coarse.w, coarse.h);
+    // (Where 0.35 of the tips' contrast set the threshold, a blob cut
+    // small is small: debris, not a tip's core.)
+    let grow_cores = coarse.k >= GROW_CORES_FROM_K && found.threshold == found.noise_floor;
+    found
+        .blobs
         .iter()
         .filter_map(|b: &CoarseBlob| {
-            let a = b.blob.area as f64 * k * k;
+            let is_core = (b.blob.area as f64 * k * k) < MIN_TIP_SHARE * tip_area;
+            let grown;
+            let bb = if grow || (grow_cores && is_core) {
+                grown = detect::at_half_peak(&found.tophat, found.threshold, b, size, reach);
+                &grown
+            } else {
+                &b.blob
+            };
+            let a = bb.area as f64 * k * k;
             let r = a / tip_area;
-            let dim = b.blob.width().max(b.blob.height()) as f64 * k;
-            ((0.3..3.0).contains(&r) && dim < 2.5 * w + 2.0 * k && !touches_frame(&b.blob, coarse))
-                .then(|| {
-                    let (x, y) = coarse.to_full(b.blob.cx, b.blob.cy);
-                    let bb = &b.blob;
-                    let bx = [
-                        bb.x_min as f64 * k,
-                        bb.y_min as f64 * k,
-                        (bb.x_max as f64 + 1.0) * k - 1.0,
-                        (bb.y_max as f64 + 1.0) * k - 1.0,
-                    ];
-                    (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64, bx)
-                })
+            let dim = bb.width().max(bb.height()) as f64 * k;
+            ((MIN_TIP_SHARE..3.0).contains(&r)
+                && dim < 2.5 * w + 2.0 * k
+                && !touches_frame(bb, coarse))
+            .then(|| {
+                let (x, y) = coarse.to_full(bb.cx, bb.cy);
+                let bx = [
+                    bb.x_min as f64 * k,
+                    bb.y_min as f64 * k,
+                    (bb.x_max as f64 + 1.0) * k - 1.0,
+                    (bb.y_max as f64 + 1.0) * k - 1.0,
+                ];
+                (x, y, width_of_area(a, recipe.pin_shape), b.peak as f64, bx)
+            })
         })
         .collect()
 }
