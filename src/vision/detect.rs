@@ -200,7 +200,15 @@ pub enum Smoothing {
     /// valleys of a textured fixture unfilled and the threshold rises over
     /// faint debris; so it is the last resort, not the rule.
     HoleReach,
+    /// [`Smoothing::Faint`]'s box with the noise floor lowered to
+    /// [`LOW_FLOOR_SIGMAS`]. For the very last pass only, whose blobs
+    /// must stand a pitch apart to count
+    /// ([`super::top_candidates::last_resort_search`]).
+    FaintLowFloor,
 }
+
+/// The noise floor's multiple of σ for [`Smoothing::FaintLowFloor`].
+pub const LOW_FLOOR_SIGMAS: f32 = 4.0;
 
 /// [`search_coarse_expecting`] with the smoothing box of `smoothing`.
 pub fn search_coarse_smoothed(
@@ -218,7 +226,7 @@ pub fn search_coarse_smoothed(
     // peak does not.
     let m = match smoothing {
         Smoothing::Normal | Smoothing::HoleReach => (pin_c / 4.0).floor() as usize,
-        Smoothing::Faint => (pin_c / 2.5).round() as usize,
+        Smoothing::Faint | Smoothing::FaintLowFloor => (pin_c / 2.5).round() as usize,
     };
     let smooth = if m >= 1 {
         std::borrow::Cow::Owned(morph::box_mean(&coarse.data, coarse.w, coarse.h, m))
@@ -267,7 +275,7 @@ pub fn search_coarse_smoothed(
         .map(|v| v as f32)
         .unwrap_or_else(|| tophat.iter().cloned().fold(0f32, f32::max));
     // Noise floor: robust spread of the top-hat (mostly background).
-    let mut sample: Vec<f32> = tophat.iter().step_by(7).cloned().collect();
+    let mut sample = noise_sample(&coarse.data, &tophat);
     let mid = sample.len() / 2;
     let med = if sample.is_empty() {
         0.0
@@ -281,7 +289,11 @@ pub fn search_coarse_smoothed(
         let m = dev.len() / 2;
         *dev.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
     };
-    let noise_floor = med + 6.0 * 1.4826 * mad;
+    let sigmas = match smoothing {
+        Smoothing::FaintLowFloor => LOW_FLOOR_SIGMAS,
+        _ => 6.0,
+    };
+    let noise_floor = med + sigmas * 1.4826 * mad;
     let threshold = (0.35 * tip_contrast).max(noise_floor);
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
     let blobs = split_blobs(&lab, &tophat, w, threshold, &too_big)
@@ -300,6 +312,39 @@ pub fn search_coarse_smoothed(
         blobs,
     }
 }
+
+/// Every 7th top-hat value, the sample the noise floor is read from;
+/// when blocks clipped flat at the coarse image's extreme (exactly) make
+/// up more than [`FLAT_SHARE`] of it, those are left out. A background
+/// driven into saturation (gain 1.2 and more over a bright fixture) has no
+/// noise at all, and as most of the frame it pulled the floor to the
+/// top-hat of a flat image, nothing: every noise blob of the rest came
+/// through, and they formed lattices at every width (Rust seed 860 612,
+/// 60 % of it clipped white, "3320 pins outside the recipe's positions").
+/// Clipped tips, a few blocks, leave the sample as it was.
+fn noise_sample(coarse: &[f32], tophat: &[f32]) -> Vec<f32> {
+    let (lo, hi) = coarse
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    let flat = |v: f32| v == lo || v == hi;
+    let n = tophat.len().div_ceil(7);
+    let n_flat = coarse.iter().step_by(7).filter(|&&v| flat(v)).count();
+    if (n_flat as f64) <= FLAT_SHARE * n as f64 {
+        return tophat.iter().step_by(7).cloned().collect();
+    }
+    coarse
+        .iter()
+        .zip(tophat)
+        .step_by(7)
+        .filter(|&(&c, _)| !flat(c))
+        .map(|(_, &t)| t)
+        .collect()
+}
+
+/// See [`noise_sample`].
+const FLAT_SHARE: f64 = 0.2;
 
 /// A blob a search found on the top-hat `tophat` (a coarse image `w` ×
 /// `h`) above `threshold`, as it stands at half its peak when the
@@ -463,6 +508,62 @@ pub(crate) fn check_contrast(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Blocks clipped flat at the coarse image's extreme leave the noise
+    /// sample when they are more than a fifth of it, and only then.
+    #[test]
+    fn clipped_blocks_leave_the_noise_sample_only_when_they_are_many() {
+        let n = 7000;
+        let tophat: Vec<f32> = (0..n).map(|i| (i % 13) as f32).collect();
+        // 60 % clipped at the top (sign space), the rest varied below it
+        // and its lowest value once, off the sample (a sample at either
+        // extreme reads as clipped).
+        let mut coarse: Vec<f32> = (0..n)
+            .map(|i| {
+                if i < 4200 {
+                    100.0
+                } else {
+                    1.0 + (i % 17) as f32
+                }
+            })
+            .collect();
+        coarse[1] = -1000.0;
+        let s = noise_sample(&coarse, &tophat);
+        let want: Vec<f32> = (0..n)
+            .step_by(7)
+            .filter(|&i| i >= 4200)
+            .map(|i| tophat[i])
+            .collect();
+        assert_eq!(s, want);
+        // 10 % clipped (tips driven into saturation): the sample as it was.
+        let mut coarse: Vec<f32> = (0..n)
+            .map(|i| {
+                if i < 700 {
+                    100.0
+                } else {
+                    1.0 + (i % 17) as f32
+                }
+            })
+            .collect();
+        coarse[1] = -1000.0;
+        let s = noise_sample(&coarse, &tophat);
+        assert_eq!(s, tophat.iter().step_by(7).cloned().collect::<Vec<_>>());
+        // Clipped at the bottom counts the same, and both extremes leave
+        // (a few tips clipped at the top).
+        let coarse: Vec<f32> = (0..n)
+            .map(|i| match i {
+                0..10 => 100.0,
+                2000.. => -5.0,
+                _ => 1.0 + (i % 17) as f32,
+            })
+            .collect();
+        let s = noise_sample(&coarse, &tophat);
+        let want: Vec<f32> = (10..2000)
+            .filter(|i| i % 7 == 0)
+            .map(|i| tophat[i])
+            .collect();
+        assert_eq!(s, want);
+    }
 
     /// Four tips (peak 100) beside 120 fainter tip-sized texture blobs
     /// (peak 20, enough of them for Otsu's level to fall below them):

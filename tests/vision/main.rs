@@ -14,6 +14,7 @@ mod bad_input;
 mod cli;
 mod envelope;
 mod extras;
+mod faint_and_clipped;
 mod fixtures;
 mod interop;
 mod one_tip;
