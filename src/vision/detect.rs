@@ -314,21 +314,28 @@ pub fn search_coarse_smoothed(
 }
 
 /// Every 7th top-hat value, the sample the noise floor is read from;
-/// when blocks clipped flat at the coarse image's extreme (exactly) make
-/// up more than [`FLAT_SHARE`] of it, those are left out. A background
-/// driven into saturation (gain 1.2 and more over a bright fixture) has no
-/// noise at all, and as most of the frame it pulled the floor to the
-/// top-hat of a flat image, nothing: every noise blob of the rest came
-/// through, and they formed lattices at every width (Rust seed 860 612,
-/// 60 % of it clipped white, "3320 pins outside the recipe's positions").
-/// Clipped tips, a few blocks, leave the sample as it was.
+/// when blocks clipped flat at the image's bright end (exactly at the
+/// coarse image's brightest raw value) make up more than [`FLAT_SHARE`]
+/// of it, those are left out. A background driven into saturation (gain
+/// 1.2 and more over a bright fixture) has no noise at all, and as most of
+/// the frame it pulled the floor to the top-hat of a flat image, nothing:
+/// every noise blob of the rest came through, and they formed lattices at
+/// every width (Rust seed 860 612, 60 % of it clipped white, "3320 pins
+/// outside the recipe's positions"). Clipped tips, a few blocks, leave the
+/// sample as it was. The dark end is left alone: a noise-free image's flat
+/// background sits there unclipped, and its floor is rightly nothing.
+///
+/// Raw samples are never negative, so the coarse image (raw × sign) holds
+/// its bright end at its maximum when any value is positive (sign +1) and
+/// at its minimum otherwise (sign −1).
 fn noise_sample(coarse: &[f32], tophat: &[f32]) -> Vec<f32> {
     let (lo, hi) = coarse
         .iter()
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
             (l.min(v), h.max(v))
         });
-    let flat = |v: f32| v == lo || v == hi;
+    let bright = if hi > 0.0 { hi } else { lo };
+    let flat = |v: f32| v == bright;
     let n = tophat.len().div_ceil(7);
     let n_flat = coarse.iter().step_by(7).filter(|&&v| flat(v)).count();
     if (n_flat as f64) <= FLAT_SHARE * n as f64 {
@@ -509,60 +516,41 @@ pub(crate) fn check_contrast(
 mod tests {
     use super::*;
 
-    /// Blocks clipped flat at the coarse image's extreme leave the noise
-    /// sample when they are more than a fifth of it, and only then.
+    /// Blocks clipped flat at the image's bright end leave the noise
+    /// sample when they are more than a fifth of it, and only then; a flat
+    /// dark end (a noise-free background) stays.
     #[test]
     fn clipped_blocks_leave_the_noise_sample_only_when_they_are_many() {
         let n = 7000;
         let tophat: Vec<f32> = (0..n).map(|i| (i % 13) as f32).collect();
-        // 60 % clipped at the top (sign space), the rest varied below it
-        // and its lowest value once, off the sample (a sample at either
-        // extreme reads as clipped).
-        let mut coarse: Vec<f32> = (0..n)
-            .map(|i| {
-                if i < 4200 {
-                    100.0
-                } else {
-                    1.0 + (i % 17) as f32
-                }
-            })
+        let every_7th = |keep: &dyn Fn(usize) -> bool| -> Vec<f32> {
+            (0..n)
+                .step_by(7)
+                .filter(|&i| keep(i))
+                .map(|i| tophat[i])
+                .collect()
+        };
+        let image = |clip: &dyn Fn(usize) -> Option<f32>| -> Vec<f32> {
+            (0..n)
+                .map(|i| clip(i).unwrap_or(1.0 + (i % 17) as f32))
+                .collect()
+        };
+        // Bright polarity (sign +1): 60 % clipped at 100, the brightest.
+        let coarse = image(&|i| (i < 4200).then_some(100.0));
+        assert_eq!(noise_sample(&coarse, &tophat), every_7th(&|i| i >= 4200));
+        // 10 % clipped (tips driven into saturation): as it was.
+        let coarse = image(&|i| (i < 700).then_some(100.0));
+        assert_eq!(noise_sample(&coarse, &tophat), every_7th(&|_| true));
+        // Dark polarity (sign −1, every value ≤ 0): the bright end is the
+        // minimum.
+        let coarse: Vec<f32> = image(&|i| (i >= 2000).then_some(100.0))
+            .iter()
+            .map(|v| -v)
             .collect();
-        coarse[1] = -1000.0;
-        let s = noise_sample(&coarse, &tophat);
-        let want: Vec<f32> = (0..n)
-            .step_by(7)
-            .filter(|&i| i >= 4200)
-            .map(|i| tophat[i])
-            .collect();
-        assert_eq!(s, want);
-        // 10 % clipped (tips driven into saturation): the sample as it was.
-        let mut coarse: Vec<f32> = (0..n)
-            .map(|i| {
-                if i < 700 {
-                    100.0
-                } else {
-                    1.0 + (i % 17) as f32
-                }
-            })
-            .collect();
-        coarse[1] = -1000.0;
-        let s = noise_sample(&coarse, &tophat);
-        assert_eq!(s, tophat.iter().step_by(7).cloned().collect::<Vec<_>>());
-        // Clipped at the bottom counts the same, and both extremes leave
-        // (a few tips clipped at the top).
-        let coarse: Vec<f32> = (0..n)
-            .map(|i| match i {
-                0..10 => 100.0,
-                2000.. => -5.0,
-                _ => 1.0 + (i % 17) as f32,
-            })
-            .collect();
-        let s = noise_sample(&coarse, &tophat);
-        let want: Vec<f32> = (10..2000)
-            .filter(|i| i % 7 == 0)
-            .map(|i| tophat[i])
-            .collect();
-        assert_eq!(s, want);
+        assert_eq!(noise_sample(&coarse, &tophat), every_7th(&|i| i < 2000));
+        // A flat dark end (60 % at 0, below everything else) stays.
+        let coarse = image(&|i| (i < 4200).then_some(0.0));
+        assert_eq!(noise_sample(&coarse, &tophat), every_7th(&|_| true));
     }
 
     /// Four tips (peak 100) beside 120 fainter tip-sized texture blobs

@@ -189,3 +189,17 @@ pub fn envelope_case(
     .unwrap_or_else(|e| panic!("{seed}: an error, not a verdict: {e}"));
     (case, r, ins)
 }
+
+/// [`envelope_case`] whose verdict must be right (a wrong one panics,
+/// naming the seed and the pins): the inspection and how many pin statuses
+/// are wrong.
+pub fn envelope_verdict_right(seed: u64) -> (pinsight::vision::Inspection, usize) {
+    let (case, r, ins) = envelope_case(seed);
+    let c = r.compare(&case.factors, &ins);
+    assert!(
+        c.verdict_ok,
+        "{seed}: verdict wrong: {:?}",
+        c.status_mismatches
+    );
+    (ins, c.status_mismatches.len())
+}

@@ -31,14 +31,7 @@ fn judge(seed: u64) -> (bool, usize, f64) {
 /// Inspects one case and asserts its verdict is right: (the inspection,
 /// how many pin statuses are wrong).
 fn with_verdict_right(seed: u64) -> (pinsight::vision::Inspection, usize) {
-    let (case, r, ins) = common::envelope_case(seed);
-    let c = r.compare(&case.factors, &ins);
-    assert!(
-        c.verdict_ok,
-        "{seed}: verdict wrong: {:?}",
-        c.status_mismatches
-    );
-    (ins, c.status_mismatches.len())
+    common::envelope_verdict_right(seed)
 }
 
 /// The inspected pin at `pos` (row, column).
