@@ -207,6 +207,10 @@ pub enum Smoothing {
     FaintLowFloor,
 }
 
+/// The noise floor's multiple of σ for every search but
+/// [`Smoothing::FaintLowFloor`]'s.
+pub const NOISE_FLOOR_SIGMAS: f32 = 6.0;
+
 /// The noise floor's multiple of σ for [`Smoothing::FaintLowFloor`].
 pub const LOW_FLOOR_SIGMAS: f32 = 4.0;
 
@@ -291,7 +295,7 @@ pub fn search_coarse_smoothed(
     };
     let sigmas = match smoothing {
         Smoothing::FaintLowFloor => LOW_FLOOR_SIGMAS,
-        _ => 6.0,
+        _ => NOISE_FLOOR_SIGMAS,
     };
     let noise_floor = med + sigmas * 1.4826 * mad;
     let threshold = (0.35 * tip_contrast).max(noise_floor);
