@@ -257,3 +257,42 @@ fn a_log_turning_corrupt_a_deleted_log_and_a_vanished_folder_are_findings_and_fo
     let files = of_kind(&ev, "file");
     assert!(files.iter().any(|f| f["state"] == "deleted"), "{files:?}");
 }
+
+/// `demo --live` makes its line in a temporary folder and leaves nothing
+/// behind: not after a normal run, and not when an argument is bad (the
+/// folder used to be made, and kept, before `--for` was read).
+#[test]
+fn the_live_demo_leaves_no_temporary_folder_behind() {
+    let tmp = tempfile::tempdir().unwrap();
+    let left = || std::fs::read_dir(tmp.path()).unwrap().count();
+    let run = |extra: &[&str]| {
+        Command::new(BIN)
+            .args(["demo", "--live"])
+            .args(extra)
+            .env("TMPDIR", tmp.path())
+            .stdin(Stdio::null())
+            .output()
+            .unwrap()
+    };
+    let ok = run(&["--for", "1s"]);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(
+        !events(&ok.stdout).is_empty(),
+        "the demo's line printed no event"
+    );
+    assert_eq!(left(), 0, "a normal run left its folder");
+    for bad in [["--for", "soon"], ["--faults", "nok=lots"]] {
+        let out = run(&bad);
+        assert!(!out.status.success(), "{bad:?} was accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(bad[0]),
+            "{bad:?}: the error does not name the option: {err}"
+        );
+        assert_eq!(left(), 0, "{bad:?} left a folder behind");
+    }
+}

@@ -34,8 +34,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !args.live {
         return super::tui::run_default();
     }
+    // Every argument is read before anything is made, so a bad one leaves
+    // no folder behind; the folder goes when `_cleanup` drops, on every path.
+    let faults = FaultSpec::parse(&args.faults).map_err(|e| anyhow!("--faults: {e}"))?;
+    let secs = crate::live::parse_duration(&args.for_).map_err(|e| anyhow!("--for: {e}"))?;
     let dir = std::env::temp_dir().join(format!("pinsight-live-demo-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
+    let _cleanup = RemoveOnDrop(dir.clone());
     let log = dir.join("line.mcap");
     let img = dir.join("camera");
     let opts = SimOptions {
@@ -44,7 +49,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         rate: 1.0,
         duration_s: 8.0 * 3600.0,
         images: Some(img.clone()),
-        faults: FaultSpec::parse(&args.faults).map_err(|e| anyhow!("--faults: {e}"))?,
+        faults,
         ..SimOptions::default()
     };
     let stop = Arc::new(AtomicBool::new(false));
@@ -54,7 +59,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .name("pinsight-rig-sim".into())
             .spawn(move || crate::live::sim::run(&opts, &stop))?
     };
-    let paths = vec![log, img];
+    // The simulator stops whatever the follower did, error or not.
+    let result = follow(vec![log, img], secs);
+    stop.store(true, Ordering::Relaxed);
+    let _ = sim.join();
+    result?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Follows the demo's line: the TUI on a terminal, else `secs` of `watch`.
+fn follow(paths: Vec<std::path::PathBuf>, secs: f64) -> anyhow::Result<()> {
     // The technician's config file: its [follow] and [alarms] apply to the
     // demo's line too, its keys and colours to the TUI.
     let config = crate::tui::config::load(None);
@@ -70,7 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             meta: Vec::new(),
         },
     )?;
-    let result = if std::io::stdout().is_terminal() && std::io::stdin().is_terminal() {
+    if std::io::stdout().is_terminal() && std::io::stdin().is_terminal() {
         crate::tui::run(
             crate::panes::Session::new("live demo"),
             crate::tui::Options {
@@ -81,7 +95,6 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             },
         )
     } else {
-        let secs = crate::live::parse_duration(&args.for_).map_err(|e| anyhow!("--for: {e}"))?;
         let mut f = crate::live::Follower::new(inputs);
         let t = std::time::Instant::now();
         let mut out = Ok(());
@@ -100,10 +113,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             std::thread::sleep(std::time::Duration::from_millis(250));
         }
         out
-    };
-    stop.store(true, Ordering::Relaxed);
-    let _ = sim.join();
-    let _ = std::fs::remove_dir_all(&dir);
-    result?;
-    Ok(ExitCode::SUCCESS)
+    }
+}
+
+/// The demo's temporary folder, removed however `run` ends.
+struct RemoveOnDrop(std::path::PathBuf);
+
+impl Drop for RemoveOnDrop {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
