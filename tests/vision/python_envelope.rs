@@ -22,8 +22,12 @@ const N: u64 = 60;
 #[test]
 fn verdicts_hold_on_an_independent_renderers_images() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = std::env::temp_dir().join(format!("pinsight-pyenv-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pyenv-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     let st = Command::new("python3")
         .arg(root.join("tests/python/connector_render.py"))
         .arg(&dir)
@@ -73,7 +77,6 @@ fn verdicts_hold_on_an_independent_renderers_images() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     ok_err.sort_by(|a, b| a.total_cmp(b));
     let median = ok_err[ok_err.len() / 2];
     let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
@@ -115,15 +118,18 @@ const MAX_MEDIAN_PX: f64 = 0.075;
 /// held-out images it fixed (docs/vision.md, "Estimated scale").
 #[test]
 fn large_tips_are_scaled_by_their_own_lattice() {
-    let dir = std::env::temp_dir().join(format!("pinsight-pyscale-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pyscale-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     // A sub-harmonic lock is 70–80 % off; with 6 pins, each up to 0.8 of
     // the position band off its node, the fitted scale is within about
     // 1 % (measured: −0.48 % and +0.95 %).
     for seed in [600_123u64, 920_025] {
         scale_found_and_verdict_right(&dir, seed);
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Renders `seed` (its recipe without `mm_per_px`) and asserts the
@@ -158,8 +164,12 @@ fn scale_found_and_verdict_right(dir: &Path, seed: u64) {
 /// renderer's truth.
 #[test]
 fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
-    let dir = std::env::temp_dir().join(format!("pinsight-pyband-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pyband-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     let seed = 590_370u64;
     let (recipe, t, v, img) = render_seed(&dir, seed);
     let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
@@ -173,7 +183,6 @@ fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
         "mm_per_px {} against {want}",
         ins.grid.mm_per_px
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A bright 1 × 2 part with one pin bent, `mm_per_px` given (590 360, the
@@ -184,8 +193,12 @@ fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
 /// renderer's truth.
 #[test]
 fn a_bent_pin_of_two_is_placed_by_the_housing_under_noise() {
-    let dir = std::env::temp_dir().join(format!("pinsight-pybent2-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pybent2-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     let seed = 590_360u64;
     let (recipe, t, _v, img) = render_seed(&dir, seed);
     assert!(recipe.mm_per_px.is_some(), "{seed}: the scale is given");
@@ -194,7 +207,6 @@ fn a_bent_pin_of_two_is_placed_by_the_housing_under_noise() {
     let c = truth::compare(&ins, &t, 15.0);
     assert!(c.verdict_ok, "{seed}: {:?}", c.status_mismatches);
     assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Debris on a bright fixture is told from the fixture's own texture by how
@@ -206,8 +218,12 @@ fn a_bent_pin_of_two_is_placed_by_the_housing_under_noise() {
 /// found. Both verdicts and the extras must match the renderer's truth.
 #[test]
 fn a_texture_clump_on_a_bright_fixture_is_no_debris_but_debris_there_is() {
-    let dir = std::env::temp_dir().join(format!("pinsight-pyfixture-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pyfixture-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     for (seed, debris) in [(590_341u64, 0usize), (620_154, 1)] {
         let (recipe, t, _v, img) = render_seed(&dir, seed);
         let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
@@ -222,7 +238,6 @@ fn a_texture_clump_on_a_bright_fixture_is_no_debris_but_debris_there_is() {
         );
         assert!(c.verdict_ok, "{seed}: {:?}", c.status_mismatches);
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Large tips (43–45 px) at contrast 0.33–0.40 on a fixture whose texture
@@ -243,12 +258,15 @@ fn a_texture_clump_on_a_bright_fixture_is_no_debris_but_debris_there_is() {
 /// truth.
 #[test]
 fn large_tips_on_texture_at_their_own_scale_are_found() {
-    let dir = std::env::temp_dir().join(format!("pinsight-pyblotch-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pyblotch-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     for seed in [650_365u64, 650_388, 590_094] {
         scale_found_and_verdict_right(&dir, seed);
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Debris on a dark part's fixture, and the fixture's texture that is no
@@ -265,8 +283,12 @@ fn large_tips_on_texture_at_their_own_scale_are_found() {
 /// tip from the truth's area centroid, so its match radius is 1.5 tips.
 #[test]
 fn debris_on_a_dark_parts_fixture_is_found_and_its_texture_is_not() {
-    let dir = std::env::temp_dir().join(format!("pinsight-pydarkfix-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    // Removed when `tmp` drops, on a failed assertion too.
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pydarkfix-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
     for (seed, debris) in [
         (590_171u64, 1usize),
         (620_290, 1),
@@ -288,7 +310,6 @@ fn debris_on_a_dark_parts_fixture_is_found_and_its_texture_is_not() {
         );
         assert!(c.verdict_ok, "{seed}: {:?}", c.status_mismatches);
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Renders one seed with the Python renderer into `dir`: its recipe, truth,
