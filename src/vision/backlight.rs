@@ -166,7 +166,13 @@ mod tests {
             }
         }
         assert!(data[20 * w + 30] > -750.0);
-        let mut c = Coarse { w, h, k: 1, data };
+        let mut c = Coarse {
+            w,
+            h,
+            k: 1,
+            data,
+            quantum: 0.0,
+        };
         flatten_residual(&mut c, -500.0, 8, 1);
         for y in 0..h {
             for x in 0..w {

@@ -211,6 +211,18 @@ pub enum Smoothing {
 /// [`Smoothing::FaintLowFloor`]'s.
 pub const NOISE_FLOOR_SIGMAS: f32 = 6.0;
 
+/// The noise floor's least value, in steps of the raw data
+/// ([`super::gray::quantum`]). An image with almost no noise (σ 0.1 DN)
+/// has a zero spread, so the floor fell to nothing, and under vignetting
+/// its background's one-step terraces became thousands of blobs, lattices
+/// at every width (Rust seed 925 251, 8-bit, 2305 × 2129: "109 pins lie on
+/// the grid but outside the recipe's 2 × 5 positions"). A terrace's
+/// top-hat is one step where the background ramps by less than a step
+/// across the opening's window, two where it is steeper; a tip inside the
+/// envelope stands at several (30 % contrast at gain 0.6 is about 10 DN
+/// in 8 bits).
+pub const QUANTUM_FLOOR_STEPS: f32 = 2.0;
+
 /// The noise floor's multiple of σ for [`Smoothing::FaintLowFloor`].
 pub const LOW_FLOOR_SIGMAS: f32 = 4.0;
 
@@ -297,7 +309,8 @@ pub fn search_coarse_smoothed(
         Smoothing::FaintLowFloor => LOW_FLOOR_SIGMAS,
         _ => NOISE_FLOOR_SIGMAS,
     };
-    let noise_floor = med + sigmas * 1.4826 * mad;
+    // Never below the quantisation's terraces (see [`QUANTUM_FLOOR_STEPS`]).
+    let noise_floor = (med + sigmas * 1.4826 * mad).max(QUANTUM_FLOOR_STEPS * coarse.quantum);
     let threshold = (0.35 * tip_contrast).max(noise_floor);
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
     let blobs = split_blobs(&lab, &tophat, w, threshold, &too_big)
@@ -557,6 +570,47 @@ mod tests {
         assert_eq!(noise_sample(&coarse, &tophat), every_7th(&|_| true));
     }
 
+    /// A noise-free frame's top-hat has no spread: its floor is then two
+    /// steps of the raw data (8-bit, and 12 bits in the high bits of 16),
+    /// and the four tips 12 steps over faint shading that rounds to
+    /// islands one step high are the only blobs at the tips' width and
+    /// at larger ones (as the scale search tries them). Seed 925 251 of
+    /// `tests/vision/faint_and_clipped.rs` is the case that failed.
+    #[test]
+    fn a_noise_free_frame_has_a_floor_of_two_steps_of_its_data() {
+        let (w, h) = (480usize, 360usize);
+        let mut raw: Vec<u16> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                (40.2 + 0.6 * (x / 5.0).sin() * (y / 5.0).sin()).round() as u16
+            })
+            .collect();
+        for t in 0..4 {
+            let (x0, y0) = (150 + 50 * t, 170);
+            for y in y0..y0 + 8 {
+                for x in x0..x0 + 8 {
+                    raw[y * w + x] += 12;
+                }
+            }
+        }
+        for step in [1u16, 16] {
+            let data: Vec<u16> = raw.iter().map(|v| v * step).collect();
+            let plane = Plane { w, h, data: &data };
+            let coarse = Coarse::build(&plane, 1, 1.0);
+            assert_eq!(coarse.quantum, step as f32);
+            for pin_px in [8.0, 16.0, 24.0] {
+                let found = search_coarse(&coarse, pin_px, None);
+                assert_eq!(found.noise_floor, 2.0 * step as f32, "{pin_px} px");
+                assert_eq!(
+                    found.blobs.len(),
+                    4,
+                    "{pin_px} px: threshold {}",
+                    found.threshold
+                );
+            }
+        }
+    }
+
     /// Four tips (peak 100) beside 120 fainter tip-sized texture blobs
     /// (peak 20, enough of them for Otsu's level to fall below them):
     /// counted over every blob, the typical contrast is the texture's and
@@ -579,7 +633,13 @@ mod tests {
         for i in 0..120 {
             square(8 + 16 * (i % 20), 60 + 28 * (i / 20), 20.0);
         }
-        let coarse = Coarse { w, h, k: 1, data };
+        let coarse = Coarse {
+            w,
+            h,
+            k: 1,
+            data,
+            quantum: 0.0,
+        };
         let all = search_coarse(&coarse, 6.0, None);
         assert!(all.tip_contrast < 30.0, "{}", all.tip_contrast);
         assert_eq!(all.blobs.len(), 124);

@@ -159,6 +159,29 @@ impl Gray {
     }
 }
 
+/// The smallest step between neighbouring raw samples, over up to 64 rows
+/// spread down the plane: 1 for 8-bit data, 16 for 12-bit data stored in
+/// the high bits of 16, and so on; 0 for a flat plane. Below about one
+/// step a top-hat holds only quantisation: a noise-free 8-bit background
+/// under vignetting is a staircase of one-step terraces, each a blob to a
+/// threshold the (zero) noise has left at nothing.
+pub fn quantum<P: Px>(p: &Plane<P>) -> f32 {
+    let step = (p.h / 64).max(1);
+    let mut q = u32::MAX;
+    for row in p.data.chunks_exact(p.w.max(1)).step_by(step) {
+        for pair in row.windows(2) {
+            let d = pair[0].u().abs_diff(pair[1].u());
+            if d > 0 && d < q {
+                q = d;
+            }
+        }
+        if q == 1 {
+            break;
+        }
+    }
+    if q == u32::MAX { 0.0 } else { q as f32 }
+}
+
 /// Block-mean image: coarse pixel (i, j) is the mean of the full-resolution
 /// block [i k, i k + k) × [j k, j k + k), multiplied by `sign` (−1 turns a
 /// dark-on-bright polarity into bright-on-dark). Its centre lies at full
@@ -169,6 +192,9 @@ pub struct Coarse {
     pub h: usize,
     pub k: usize,
     pub data: Vec<f32>,
+    /// The raw samples' smallest step ([`quantum`]); 0 when not known
+    /// (a coarse image made from something other than a plane).
+    pub quantum: f32,
 }
 
 impl Coarse {
@@ -199,7 +225,13 @@ impl Coarse {
                 *d = *a as f32 * norm;
             }
         }
-        Coarse { w, h, k, data }
+        Coarse {
+            w,
+            h,
+            k,
+            data,
+            quantum: quantum(p),
+        }
     }
 
     #[inline(always)]
@@ -247,6 +279,25 @@ fn bilinear(size: (usize, usize), x: f64, y: f64, at: impl Fn(usize, usize) -> f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The raw data's step: 1 for 8-bit data, 16 for 12 bits in the high
+    /// bits of 16, 0 for a flat plane.
+    #[test]
+    fn quantum_is_the_raw_datas_smallest_step() {
+        let (w, h) = (50usize, 20usize);
+        let ramp: Vec<u8> = (0..w * h).map(|i| (i % w / 3) as u8).collect();
+        let p = Plane { w, h, data: &ramp };
+        assert_eq!(quantum(&p), 1.0);
+        let high: Vec<u16> = (0..w * h).map(|i| ((i % w) as u16 * 7) << 4).collect();
+        let p = Plane { w, h, data: &high };
+        assert_eq!(quantum(&p), 112.0);
+        let high: Vec<u16> = (0..w * h).map(|i| ((i % w / 2) as u16) << 4).collect();
+        let p = Plane { w, h, data: &high };
+        assert_eq!(quantum(&p), 16.0);
+        let flat = vec![9u8; w * h];
+        let p = Plane { w, h, data: &flat };
+        assert_eq!(quantum(&p), 0.0);
+    }
 
     #[test]
     fn full_scale_follows_the_significant_bits_of_16_bit_data() {

@@ -600,7 +600,13 @@ mod tests {
                 }
             }
         }
-        let mut coarse = Coarse { w, h, k: 1, data };
+        let mut coarse = Coarse {
+            w,
+            h,
+            k: 1,
+            data,
+            quantum: 0.0,
+        };
         let r = recipe(1, 6, "");
         assert_eq!(score_candidate(&r, &coarse, 6.0, 1.0).score, 0);
         // The same bumps inside the frame are a lattice.

@@ -438,6 +438,7 @@ pub fn inspect_top<P: Px>(
         h: cs.coarse.h,
         k: cs.coarse.k,
         data: cs.background.clone(),
+        quantum: cs.coarse.quantum,
     };
     let bg_at = |x: f64, y: f64| {
         let (cx, cy) = bg_img.from_full(x, y);

@@ -52,6 +52,7 @@ pub(crate) fn settle_by_evidence(
         h: cs.coarse.h,
         k: cs.coarse.k,
         data: cs.tophat.clone(),
+        quantum: cs.coarse.quantum,
     };
     // The top-hat's noise (robust spread, mostly background), in tip units.
     let mut sample: Vec<f64> = cs.tophat.iter().step_by(7).map(|&v| v as f64).collect();
@@ -142,6 +143,7 @@ mod tests {
                 h,
                 k: 1,
                 data: vec![0.0; w * h],
+                quantum: 0.0,
             },
             tophat: th,
             background: vec![0.0; w * h],

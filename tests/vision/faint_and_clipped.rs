@@ -34,3 +34,14 @@ fn small_faint_tips_in_a_dim_corner_are_found_on_their_lattice() {
     // the verdict, a missing pin and debris, is right.
     assert!(verdict_right(900_064) <= 2);
 }
+
+/// 925 251: a 2 × 5 part in a 2305 × 2129 8-bit frame with almost no
+/// noise (σ 0.1 DN), vignetting 0.32, contrast 0.31 at gain 0.62. The
+/// top-hat's spread was nothing, so the floor was too, and the
+/// background's one-DN terraces passed as thousands of blobs in lattices
+/// at every width ("109 pins lie on the grid but outside the recipe's
+/// 2 × 5 positions"). The floor is now never below two steps of the data.
+#[test]
+fn a_noise_free_frame_under_vignetting_is_not_a_field_of_terraces() {
+    assert_eq!(verdict_right(925_251), 0);
+}
