@@ -9,9 +9,10 @@
 //! minority of the draws, and a change to their pipeline is measured on
 //! them alone.
 //!
-//! `--save DIR` writes each wrongly judged image (PNG, 16-bit where the
-//! case was), its truth and its recipe for a closer look; `--list` prints
-//! one line per wrong case; `--bound` adds, for the top views' ok pins, the
+//! `--save DIR` writes each wrongly judged image, and each with an ok pin's
+//! centre more than a pixel off (PNG, 16-bit where the case was), its truth
+//! and its recipe for a closer look; `--list` prints one line per wrong case
+//! and one per image with centres off, by their share of the squared error; `--bound` adds, for the top views' ok pins, the
 //! Cramér–Rao lower bound on the centre error (what any unbiased
 //! measurement could reach in that image) beside the measured error.
 use pinsight::vision::synth_envelope::{EnvelopeCase, Factors, Rendered};
@@ -126,7 +127,8 @@ fn main() {
                     }
                 }
             }
-            let wrong = o.error.is_some() || !o.verdict_ok;
+            // Saved too: a right verdict with an ok pin more than a pixel off.
+            let wrong = o.error.is_some() || !o.verdict_ok || o.ok_sq.iter().any(|&e| e > 1.0);
             if wrong && let Some(d) = &save {
                 let stem = d.join(format!("env-{seed:05}"));
                 let _ = r.gray.to_display_u8().save(stem.with_extension("png"));
@@ -282,36 +284,63 @@ fn report(o: &[Outcome], wall: f64, list: bool) {
                 .collect::<Vec<_>>()
                 .iter(),
         ) {
-            let f = &x.f;
+            println!("seed {}: {}", describe(&x.f), x.detail);
+        }
+        // Where the ok-pin centre RMS comes from: the images with an ok pin
+        // more than a pixel off (a grid a pitch off puts every pin a pitch
+        // off), largest share of the squared error first.
+        let total: f64 = o.iter().flat_map(|x| x.ok_sq.iter()).sum();
+        let mut off: Vec<&Outcome> = o
+            .iter()
+            .filter(|x| x.ok_sq.iter().any(|&e| e > 1.0))
+            .collect();
+        off.sort_by(|a, b| {
+            b.ok_sq
+                .iter()
+                .sum::<f64>()
+                .total_cmp(&a.ok_sq.iter().sum::<f64>())
+        });
+        for x in off {
+            let sum: f64 = x.ok_sq.iter().sum();
+            let max = x.ok_sq.iter().cloned().fold(0.0, f64::max).sqrt();
             println!(
-                "seed {} {:?} {:?} {:?} {}x{} {}x{} {:.4} mm/px{} tip {:.1} px rot {:.1} c {:.2} noise {:.1} blur {:.2} vig {:.2} grad {:.2} gain {:.2} {:?} {}bit{} defects {:?}: {}",
-                f.seed,
-                f.view,
-                f.polarity,
-                f.pin_shape,
-                f.rows,
-                f.cols,
-                f.width,
-                f.height,
-                f.mm_per_px,
-                if f.scale_in_recipe { "" } else { " (est.)" },
-                f.tip_px,
-                f.rotation_deg,
-                f.contrast,
-                f.noise_dn,
-                f.blur_px,
-                f.vignetting,
-                f.gradient,
-                f.gain,
-                f.jpeg_quality,
-                f.bits,
-                if f.colour { " colour" } else { "" },
-                f.defects,
-                x.detail
+                "centres off: seed {}: {} ok pins, worst {max:.2} px, {:.1} % of the ok-pin squared error",
+                describe(&x.f),
+                x.ok_sq.len(),
+                100.0 * sum / total.max(f64::MIN_POSITIVE)
             );
         }
     }
     let _ = Verdict::Pass;
+}
+
+/// One case's factors on one line (the `--list` lines).
+fn describe(f: &Factors) -> String {
+    format!(
+        "{} {:?} {:?} {:?} {}x{} {}x{} {:.4} mm/px{} tip {:.1} px rot {:.1} c {:.2} noise {:.1} blur {:.2} vig {:.2} grad {:.2} gain {:.2} {:?} {}bit{} defects {:?}",
+        f.seed,
+        f.view,
+        f.polarity,
+        f.pin_shape,
+        f.rows,
+        f.cols,
+        f.width,
+        f.height,
+        f.mm_per_px,
+        if f.scale_in_recipe { "" } else { " (est.)" },
+        f.tip_px,
+        f.rotation_deg,
+        f.contrast,
+        f.noise_dn,
+        f.blur_px,
+        f.vignetting,
+        f.gradient,
+        f.gain,
+        f.jpeg_quality,
+        f.bits,
+        if f.colour { " colour" } else { "" },
+        f.defects,
+    )
 }
 
 fn line(label: &str, sel: &[&Outcome]) {
