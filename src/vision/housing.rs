@@ -38,39 +38,42 @@ pub(crate) fn find_housing(
         let (cx, cy) = coarse.from_full(x, y);
         coarse.bilinear(cx, cy)
     };
-    // Outermost strong step along a line (dir = +1/−1 along a or b).
-    let edge_along = |along_a: bool, fixed: f64, start: f64, dir: f64, pitch: f64| -> Option<f64> {
-        let step = 0.5 * k / pitch;
-        let len = 2.6;
-        let n = (len / step) as usize + 3;
-        let prof: Vec<f32> = (0..n)
-            .map(|i| {
-                let t = start + dir * i as f64 * step;
-                if along_a {
-                    sample(t, fixed)
-                } else {
-                    sample(fixed, t)
-                }
-            })
-            .collect();
-        let g: Vec<f32> = (1..n - 1)
-            .map(|i| (prof[i + 1] - prof[i - 1]).abs())
-            .collect();
-        let gmax = g.iter().cloned().fold(0f32, f32::max);
-        // The step's height, for the test against `min_step`, over
-        // [`STEP_REACH_PX`] or [`STEP_REACH_PITCH`] either side: a blurred
-        // or chamfered edge's central difference holds only a slice of it.
-        let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
-        let d = ((reach / (0.5 * k)).round() as usize).max(1);
-        let height = (d..n.saturating_sub(d))
-            .map(|i| (prof[i + d] - prof[i - d]).abs())
-            .fold(0f32, f32::max);
-        if gmax.max(height) < min_step {
-            return None;
-        }
-        let i = g.iter().rposition(|&v| v >= 0.4 * gmax)?;
-        Some(start + dir * (i + 1) as f64 * step)
-    };
+    // Outermost strong step along a line (dir = +1/−1 along a or b), and
+    // whether the neighbouring samples' difference alone reached
+    // `min_step` (a sharp edge) or only the step's height did.
+    let edge_along =
+        |along_a: bool, fixed: f64, start: f64, dir: f64, pitch: f64| -> Option<(f64, bool)> {
+            let step = 0.5 * k / pitch;
+            let len = 2.6;
+            let n = (len / step) as usize + 3;
+            let prof: Vec<f32> = (0..n)
+                .map(|i| {
+                    let t = start + dir * i as f64 * step;
+                    if along_a {
+                        sample(t, fixed)
+                    } else {
+                        sample(fixed, t)
+                    }
+                })
+                .collect();
+            let g: Vec<f32> = (1..n - 1)
+                .map(|i| (prof[i + 1] - prof[i - 1]).abs())
+                .collect();
+            let gmax = g.iter().cloned().fold(0f32, f32::max);
+            // The step's height, for the test against `min_step`, over
+            // [`STEP_REACH_PX`] or [`STEP_REACH_PITCH`] either side: a blurred
+            // or chamfered edge's central difference holds only a slice of it.
+            let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
+            let d = ((reach / (0.5 * k)).round() as usize).max(1);
+            let height = (d..n.saturating_sub(d))
+                .map(|i| (prof[i + d] - prof[i - d]).abs())
+                .fold(0f32, f32::max);
+            if gmax.max(height) < min_step {
+                return None;
+            }
+            let i = g.iter().rposition(|&v| v >= 0.4 * gmax)?;
+            Some((start + dir * (i + 1) as f64 * step, gmax >= min_step))
+        };
     let half_pin_a = (0.5 * pin_px + 2.0) / lat.px;
     let half_pin_b = (0.5 * pin_px + 2.0) / lat.py;
     let off_a = 0.9 * pin_px / lat.px;
@@ -84,9 +87,21 @@ pub(crate) fn find_housing(
         a_lines.push(a as f64 + 0.5);
     }
     let side = |along_a: bool, lines: &[f64], start: f64, dir: f64, pitch: f64| -> Option<f64> {
-        let mut v: Vec<f64> = lines
+        let found: Vec<(f64, bool)> = lines
             .iter()
             .filter_map(|&f| edge_along(along_a, f, start, dir, pitch))
+            .collect();
+        // Sharp edges where there are any; the step's height only decides
+        // a side where no line found one. On a blotchy fixture a line
+        // whose edge is faint finds its outermost step on the texture
+        // beyond the housing (Python 690 300: taken with the sharp lines,
+        // they moved the median edge from 0.67 to 1.99 pitches out and a
+        // texture blotch became debris "0.00 mm from the housing").
+        let sharp = found.iter().any(|e| e.1);
+        let mut v: Vec<f64> = found
+            .iter()
+            .filter(|e| e.1 || !sharp)
+            .map(|e| e.0)
             .collect();
         grid::median(&mut v)
     };
