@@ -60,19 +60,24 @@ pub(crate) fn find_housing(
                 .map(|i| (prof[i + 1] - prof[i - 1]).abs())
                 .collect();
             let gmax = g.iter().cloned().fold(0f32, f32::max);
-            // The step's height, for the test against `min_step`, over
-            // [`STEP_REACH_PX`] or [`STEP_REACH_PITCH`] either side: a blurred
-            // or chamfered edge's central difference holds only a slice of it.
-            let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
-            let d = ((reach / (0.5 * k)).round() as usize).max(1);
-            let height = (d..n.saturating_sub(d))
-                .map(|i| (prof[i + d] - prof[i - d]).abs())
-                .fold(0f32, f32::max);
-            if gmax.max(height) < min_step {
-                return None;
+            // A sharp edge: the neighbouring samples' difference reaches
+            // `min_step`. Otherwise the step's height must, read over
+            // [`STEP_REACH_PX`] or [`STEP_REACH_PITCH`] either side: a
+            // blurred or chamfered edge's central difference holds only a
+            // slice of it.
+            let sharp = gmax >= min_step;
+            if !sharp {
+                let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
+                let d = ((reach / (0.5 * k)).round() as usize).max(1);
+                let height = (d..n.saturating_sub(d))
+                    .map(|i| (prof[i + d] - prof[i - d]).abs())
+                    .fold(0f32, f32::max);
+                if height < min_step {
+                    return None;
+                }
             }
             let i = g.iter().rposition(|&v| v >= 0.4 * gmax)?;
-            Some((start + dir * (i + 1) as f64 * step, gmax >= min_step))
+            Some((start + dir * (i + 1) as f64 * step, sharp))
         };
     let half_pin_a = (0.5 * pin_px + 2.0) / lat.px;
     let half_pin_b = (0.5 * pin_px + 2.0) / lat.py;
