@@ -173,17 +173,13 @@ pub fn inspect_top<P: Px>(
             });
         }
     };
-    // Lattice members (pin-like blobs on lattice nodes).
-    let idx: Vec<Option<grid::LatticeIndex>> = cands
+    // Lattice members (pin-like blobs on lattice nodes), read again on
+    // the lattice refitted to them.
+    let pin_like: Vec<Option<(f64, f64)>> = cands
         .iter()
-        .map(|c| {
-            if c.pinlike {
-                grid::index_of(&lat, (c.m.x, c.m.y), 0.3)
-            } else {
-                None
-            }
-        })
+        .map(|c| c.pinlike.then_some((c.m.x, c.m.y)))
         .collect();
+    let (lat, idx) = grid::members_refined(lat, &pin_like);
     let members: Vec<(i64, i64)> = idx.iter().flatten().map(|i| (i.a, i.b)).collect();
     if members.is_empty() {
         return Err(VisionError::NoPins {

@@ -16,6 +16,7 @@ mod envelope;
 mod extras;
 mod faint_and_clipped;
 mod fixtures;
+mod grid_on_the_tips;
 mod housing_edges;
 mod interop;
 mod one_tip;
