@@ -55,10 +55,11 @@ pub(super) fn measure_blobs<P: Px>(
     }
     // Two coarse blobs can resolve to one blob at full resolution, or the
     // smaller to a piece of the larger: a centre within half a tip of a
-    // larger tip-sized blob's lies on that blob. Rust seed 925 116 (a dark tip off
-    // centre in its bright hole): the whole tip and a third of it, 3.2 px
-    // apart, were both kept; the piece stood nearer the grid's position
-    // and was read a damaged pin, the tip itself an extra.
+    // larger tip-sized blob's lies on that blob. Rust seed 925 116 (a
+    // dark tip off centre in its bright hole): the whole tip and a third
+    // of it, 3.2 px apart, were both kept; the piece stood nearer the
+    // grid's position and was read a damaged pin, the tip itself an
+    // extra.
     out.sort_by(|a, b| b.0.area_px.total_cmp(&a.0.area_px));
     let mut kept: Vec<(BlobMeasure, Roi, (f64, f64))> = Vec::with_capacity(out.len());
     for m in out {
