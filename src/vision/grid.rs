@@ -311,51 +311,36 @@ pub type OnNode = ((f64, f64), (i64, i64));
 /// the fit moves the pitch by more than 15 % or the rotation by more than
 /// 3° (the points then do not say more than the estimate did).
 pub fn refine_lattice(lat: &Lattice, on_nodes: &[OnNode]) -> Option<Lattice> {
+    // The lattice is a similarity from node coordinates (a, b·py/px) to
+    // the image, its scale the pitch px: the least-squares similarity fit
+    // the grid fit uses, with the dropped points weighted 0.
     let r = lat.py / lat.px;
-    let fit = |use_pt: &dyn Fn(usize) -> bool| -> Option<Lattice> {
-        let mut ata = nalgebra::Matrix4::<f64>::zeros();
-        let mut atb = nalgebra::Vector4::<f64>::zeros();
-        let mut n = 0usize;
-        for (i, &((x, y), (a, b))) in on_nodes.iter().enumerate() {
-            if !use_pt(i) {
-                continue;
-            }
-            let (a, b) = (a as f64, b as f64 * r);
-            // x = ox + a·U − b·V,  y = oy + b·U + a·V  (U = px cos θ, V = px sin θ)
-            let rows = [
-                (nalgebra::Vector4::new(1.0, 0.0, a, -b), x),
-                (nalgebra::Vector4::new(0.0, 1.0, b, a), y),
-            ];
-            for (row, v) in rows {
-                ata += row * row.transpose();
-                atb += row * v;
-            }
-            n += 1;
-        }
-        if n < 3 {
+    let model: Vec<(f64, f64)> = on_nodes
+        .iter()
+        .map(|&(_, (a, b))| (a as f64, b as f64 * r))
+        .collect();
+    let image: Vec<(f64, f64)> = on_nodes.iter().map(|&(p, _)| p).collect();
+    let fit = |weights: &[f64]| -> Option<Lattice> {
+        if weights.iter().filter(|&&w| w > 0.0).count() < 3 {
             return None;
         }
-        let p = ata.lu().solve(&atb)?;
-        let px = p[2].hypot(p[3]);
+        let sim = super::fit::fit_similarity(&model, &image, weights, None, lat.theta)?;
         Some(Lattice {
-            theta: p[3].atan2(p[2]),
-            px,
-            py: px * r,
-            origin: (p[0], p[1]),
+            theta: sim.theta,
+            px: sim.s,
+            py: sim.s * r,
+            origin: (sim.tx, sim.ty),
         })
     };
-    let distinct = on_nodes
+    let first = fit(&vec![1.0; on_nodes.len()])?;
+    let close: Vec<f64> = on_nodes
         .iter()
-        .any(|&(_, node)| node != on_nodes.first().map_or(node, |f| f.1));
-    if !distinct {
-        return None;
-    }
-    let first = fit(&|_| true)?;
-    let close = |i: usize| {
-        let ((x, y), (a, b)) = on_nodes[i];
-        let (fa, fb) = first.to_lattice((x, y));
-        (fa - a as f64).abs() < 0.15 && (fb - b as f64).abs() < 0.15
-    };
+        .map(|&(p, (a, b))| {
+            let (fa, fb) = first.to_lattice(p);
+            let near = (fa - a as f64).abs() < 0.15 && (fb - b as f64).abs() < 0.15;
+            if near { 1.0 } else { 0.0 }
+        })
+        .collect();
     let l = fit(&close).unwrap_or(first);
     let moved =
         (l.px / lat.px - 1.0).abs() > 0.15 || (l.theta - lat.theta).abs() > 3f64.to_radians();
