@@ -68,6 +68,7 @@ mod top_extras;
 mod top_faint;
 mod top_fixture;
 mod top_noisy;
+mod top_ridge;
 mod top_shoulder;
 mod top_window;
 pub mod truth;
