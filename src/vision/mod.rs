@@ -59,6 +59,7 @@ mod side_bar;
 mod side_edge;
 mod side_end;
 mod side_row;
+mod surround;
 pub mod synth;
 pub mod synth_envelope;
 pub mod tip_levels;

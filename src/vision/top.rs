@@ -17,13 +17,15 @@ use super::housing::{HousingPose, find_housing, measure_pose};
 use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
+use super::surround::SurroundPlane;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, area_ratio_of,
     contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip, neighbour_medians, snr_of,
     tip_disc_radius,
 };
 use super::top_candidates::{
-    add_faint_debris, faint_tips_to_add, last_resort_search, measure_candidates,
+    add_faint_debris, assign_to_positions, faint_tips_to_add, last_resort_search,
+    measure_candidates,
 };
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
@@ -402,29 +404,7 @@ pub fn inspect_top<P: Px>(
         px_mm
     } * sim.s;
     let r_assign = 0.4 * min_pitch_px;
-    let mut pairs = Vec::new();
-    for (pi, n) in nominal.iter().enumerate() {
-        for (ci, c) in cands.iter().enumerate() {
-            let d = (c.m.x - n.0).hypot(c.m.y - n.1);
-            if d < r_assign {
-                let penalty = if c.m.area_px / tip_px < 0.15 {
-                    1e6
-                } else {
-                    0.0
-                };
-                pairs.push((d + penalty, pi, ci));
-            }
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut pos_cand: Vec<Option<usize>> = vec![None; positions.len()];
-    let mut cand_used = vec![false; cands.len()];
-    for (_, pi, ci) in pairs {
-        if pos_cand[pi].is_none() && !cand_used[ci] {
-            pos_cand[pi] = Some(ci);
-            cand_used[ci] = true;
-        }
-    }
+    let (mut pos_cand, mut cand_used) = assign_to_positions(&nominal, &cands, tip_px, r_assign);
     // Local levels: every intact tip found tells the tip level and the
     // background level (housing) at its place; vignetting and gradients
     // change both slowly, so the nearest tips say what a tip must look like
@@ -528,11 +508,29 @@ pub fn inspect_top<P: Px>(
     // so that it no longer depends on the half-level mask's extent or on
     // per-tip levels, both of which noise clumps bias (seventh round,
     // docs/vision.md).
+    // Where that background was raised toward a bright fixture, a plane
+    // through the tips' own surrounds instead (`surround`).
     let disc_r = tip_disc_radius(recipe.pin_shape, pin_px, blur_sigma, min_pitch_px);
+    let around: Vec<_> = assigned
+        .iter()
+        .map(|&ci| &cands[ci].m)
+        .map(|m| (m.x, m.y, m.hi, m.lo))
+        .collect();
+    let raised = blurred
+        .then(|| SurroundPlane::if_background_raised(&around, bg_at))
+        .flatten();
+    if raised.is_some() {
+        warnings.push(format!(
+            "the housing's background stood over {:.2} of the tip contrast above the tips' surrounds (a narrow housing beside a brighter fixture): tip energies taken against a plane through the surrounds",
+            super::surround::RAISED
+        ));
+    }
+    let level_at = |x, y| raised.map_or_else(|| bg_at(x, y), |p| p.at(x, y));
     if blurred {
         for &ci in pos_cand.iter().flatten() {
             let m = &mut cands[ci].m;
-            m.energy = super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
+            m.energy =
+                super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
         }
     }
     let area_of =
@@ -600,7 +598,8 @@ pub fn inspect_top<P: Px>(
             continue;
         };
         if blurred {
-            m.energy = super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, bg_at(m.x, m.y));
+            m.energy =
+                super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
         }
         let rho = contrast_ratio(m.hi, t_exp, b_exp);
         let snr = snr_of(&m);
@@ -632,7 +631,7 @@ pub fn inspect_top<P: Px>(
         let whole = (blurred && looks_tip && !tip_bright && !dim && m.touches_border)
             .then(|| neighbour_medians(&cands, &assigned, (nx, ny), None))
             .flatten()
-            .and_then(|(me, _)| noisy.whole_tip((nx, ny), m.noise, bg_at(nx, ny), me?));
+            .and_then(|(me, _)| noisy.whole_tip((nx, ny), m.noise, level_at(nx, ny), me?));
         if let Some(((x, y), ratio)) = whole {
             (m.x, m.y) = (x, y);
             by_energy[pi] = Some(ratio);

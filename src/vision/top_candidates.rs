@@ -246,3 +246,39 @@ fn paired_tips(cands: &[Candidate], pitch: (f64, f64)) -> usize {
         })
         .count()
 }
+
+/// Each grid position's candidate: (position → candidate, candidate
+/// taken), nearest pairs first within `r_assign` (px) of the position's
+/// `nominal` place, a blob under 0.15 of a tip's area (`tip_px`) taken
+/// only where no larger one is in reach.
+pub(super) fn assign_to_positions(
+    nominal: &[(f64, f64)],
+    cands: &[Candidate],
+    tip_px: f64,
+    r_assign: f64,
+) -> (Vec<Option<usize>>, Vec<bool>) {
+    let mut pairs = Vec::new();
+    for (pi, n) in nominal.iter().enumerate() {
+        for (ci, c) in cands.iter().enumerate() {
+            let d = (c.m.x - n.0).hypot(c.m.y - n.1);
+            if d < r_assign {
+                let penalty = if c.m.area_px / tip_px < 0.15 {
+                    1e6
+                } else {
+                    0.0
+                };
+                pairs.push((d + penalty, pi, ci));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut pos_cand: Vec<Option<usize>> = vec![None; nominal.len()];
+    let mut used = vec![false; cands.len()];
+    for (_, pi, ci) in pairs {
+        if pos_cand[pi].is_none() && !used[ci] {
+            pos_cand[pi] = Some(ci);
+            used[ci] = true;
+        }
+    }
+    (pos_cand, used)
+}

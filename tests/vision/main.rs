@@ -11,6 +11,7 @@
 mod common;
 
 mod bad_input;
+mod blurred_tip_areas;
 mod cli;
 mod envelope;
 mod extras;
