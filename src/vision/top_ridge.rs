@@ -83,18 +83,10 @@ pub(super) fn ridge_level<P: Px>(
 mod tests {
     use super::*;
 
-    fn probe(reach: f64, r_disc: f64, clear: f64) -> Probe {
-        Probe {
-            reach,
-            r_disc,
-            clear,
-        }
-    }
-
-    /// A 80 × 80 image at background 100, tip level 200 (so level 0.5 is
+    /// An 80 × 80 image at background 100, tip level 200 (so level 0.5 is
     /// 150), with a horizontal band at `band` through row 40, 5 px wide,
-    /// and a disc of radius 4 at (40, 40) at 200.
-    fn scene(band: Option<u16>) -> Vec<u16> {
+    /// and discs of radius 4 at (40, 40) and at `tips`, at 200.
+    fn scene(band: Option<u16>, tips: &[(f64, f64)]) -> Vec<u16> {
         let mut d = vec![100u16; 80 * 80];
         for y in 0..80 {
             for x in 0..80 {
@@ -103,7 +95,8 @@ mod tests {
                 {
                     d[y * 80 + x] = v;
                 }
-                if (x as f64 - 40.0).hypot(y as f64 - 40.0) <= 4.0 {
+                let on = |c: &(f64, f64)| (x as f64 - c.0).hypot(y as f64 - c.1) <= 4.0;
+                if on(&(40.0, 40.0)) || tips.iter().any(on) {
                     d[y * 80 + x] = 200;
                 }
             }
@@ -111,39 +104,27 @@ mod tests {
         d
     }
 
+    /// The ridge through `c` in `d`, read 12 px out over discs of 1.5 px,
+    /// sides within `clear` of `tips` unread.
+    fn ridge(d: &[u16], c: (f64, f64), tips: &[(f64, f64)], clear: f64) -> Option<f64> {
+        let p = Plane {
+            w: 80,
+            h: 80,
+            data: d,
+        };
+        let probe = Probe {
+            reach: 12.0,
+            r_disc: 1.5,
+            clear,
+        };
+        ridge_level(&p, 1.0, c, probe, (200.0, 100.0), tips)
+    }
+
     #[test]
     fn a_band_through_the_blob_reads_at_its_own_level_and_a_bare_housing_at_zero() {
-        let d = scene(Some(150));
-        let p = Plane {
-            w: 80,
-            h: 80,
-            data: &d,
-        };
-        let r = ridge_level(
-            &p,
-            1.0,
-            (40.0, 40.0),
-            probe(12.0, 1.5, 3.0),
-            (200.0, 100.0),
-            &[],
-        )
-        .unwrap();
+        let r = ridge(&scene(Some(150), &[]), (40.0, 40.0), &[], 3.0).unwrap();
         assert!((r - 0.5).abs() < 1e-6, "{r}");
-        let d = scene(None);
-        let p = Plane {
-            w: 80,
-            h: 80,
-            data: &d,
-        };
-        let r = ridge_level(
-            &p,
-            1.0,
-            (40.0, 40.0),
-            probe(12.0, 1.5, 3.0),
-            (200.0, 100.0),
-            &[],
-        )
-        .unwrap();
+        let r = ridge(&scene(None, &[]), (40.0, 40.0), &[], 3.0).unwrap();
         assert!(r.abs() < 1e-6, "{r}");
     }
 
@@ -151,54 +132,15 @@ mod tests {
     fn a_tip_on_one_side_is_no_ridge_and_sides_off_the_image_are_not_read() {
         // Tips at ±12 px along the row make the band's direction unreadable;
         // every other direction sees the bare housing.
-        let mut d = scene(None);
-        for (tx, ty) in [(28.0, 40.0), (52.0, 40.0)] {
-            for y in 0..80 {
-                for x in 0..80 {
-                    if (x as f64 - tx).hypot(y as f64 - ty) <= 4.0 {
-                        d[y * 80 + x] = 200;
-                    }
-                }
-            }
-        }
-        let p = Plane {
-            w: 80,
-            h: 80,
-            data: &d,
-        };
         let tips = [(28.0, 40.0), (52.0, 40.0)];
-        let r = ridge_level(
-            &p,
-            1.0,
-            (40.0, 40.0),
-            probe(12.0, 1.5, 6.0),
-            (200.0, 100.0),
-            &tips,
-        )
-        .unwrap();
+        let d = scene(None, &tips);
+        let r = ridge(&d, (40.0, 40.0), &tips, 6.0).unwrap();
         assert!(r < 0.05, "{r}");
         // Without the tips named, the row through them reads as a ridge.
-        let r = ridge_level(
-            &p,
-            1.0,
-            (40.0, 40.0),
-            probe(12.0, 1.5, 6.0),
-            (200.0, 100.0),
-            &[],
-        )
-        .unwrap();
+        let r = ridge(&d, (40.0, 40.0), &[], 6.0).unwrap();
         assert!(r > 0.95, "{r}");
-        // A blob at the image's corner has no direction whose sides both lie inside.
-        assert!(
-            ridge_level(
-                &p,
-                1.0,
-                (2.0, 2.0),
-                probe(12.0, 1.5, 6.0),
-                (200.0, 100.0),
-                &[]
-            )
-            .is_none()
-        );
+        // A blob at the image's corner has no direction whose sides both
+        // lie inside.
+        assert!(ridge(&d, (2.0, 2.0), &[], 6.0).is_none());
     }
 }
