@@ -362,7 +362,8 @@ pub fn inspect_top<P: Px>(
         });
         (!far).then_some(h)
     };
-    if let Some(h) = housing_frame(&sim, &model, &image) {
+    let by_housing = housing_frame(&sim, &model, &image);
+    if let Some(h) = by_housing {
         sim = h;
         warnings.push(format!(
             "{} pins do not over-determine the grid: its rotation and centre taken from the housing's outline",
@@ -484,7 +485,10 @@ pub fn inspect_top<P: Px>(
             .collect();
         let tau = recipe.tolerance.position_mm * sim.s;
         if let Some(f) = fit::consensus_similarity(&model, &image, fixed, Some(sim), 0.1, tau) {
-            sim = housing_frame(&f.sim, &model, &image).unwrap_or(f.sim);
+            // The housing read once stays the datum if it is not read again.
+            sim = housing_frame(&f.sim, &model, &image)
+                .or(by_housing)
+                .unwrap_or(f.sim);
             inliers = f.inlier.iter().filter(|b| **b).count();
             rms = f.rms_px;
             for (pi, &(r, c)) in positions.iter().enumerate() {
