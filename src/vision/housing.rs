@@ -303,10 +303,7 @@ pub(crate) fn measure_pose<P: Px>(
         sd / sw
     };
     let mut dtheta = mean_of(None);
-    let odd: Vec<usize> = (0..4)
-        .filter(|&i| !agree(lines[i].2, lines[i].3, dtheta))
-        .collect();
-    if !odd.is_empty() {
+    if !lines.iter().all(|l| agree(l.2, l.3, dtheta)) {
         // A single side turned against three that agree (an end of the
         // housing beside the orientation mark, whose step pulls part of
         // the side's profiles: Rust 945 509, 0.03 rad off) is placed by
