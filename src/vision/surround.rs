@@ -66,14 +66,14 @@ impl SurroundPlane {
         let first = Self::fit(&pts)?;
         // Once more without the surrounds 3 robust σ off the first plane
         // (a tip beside debris or the housing's corner).
-        let mut res: Vec<f64> = pts
+        let res: Vec<f64> = pts
             .iter()
             .map(|p| (p.2 - first.at(p.0, p.1) as f64).abs())
             .collect();
         let sigma = 1.4826 * grid::median(&mut res.clone())?;
         let kept: Vec<(f64, f64, f64)> = pts
             .iter()
-            .zip(res.iter_mut())
+            .zip(&res)
             .filter(|(_, r)| **r <= 3.0 * sigma)
             .map(|(p, _)| *p)
             .collect();
