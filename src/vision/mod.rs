@@ -67,6 +67,7 @@ pub mod top;
 mod top_candidates;
 mod top_extras;
 mod top_faint;
+mod top_first_fit;
 mod top_fixture;
 mod top_noisy;
 mod top_ridge;

@@ -80,9 +80,10 @@ pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> 
 
 /// The top view's inspection ([`super::top::inspect_top`]), and when it
 /// finds no pins at an estimated scale, once more at the scale one whole
-/// tip gives ([`tip_width`]); the result then says the scale was estimated
-/// and from what. Any other outcome stands: an image judged before is
-/// judged the same.
+/// tip gives ([`tip_width`]), and last with a single tip found allowed to
+/// give the scale by its area; the result then says the scale was
+/// estimated and from what. Any other outcome stands: an image judged
+/// before is judged the same.
 pub(super) fn inspect_top<P: Px>(
     recipe: &Recipe,
     plane: &Plane<P>,
@@ -95,20 +96,21 @@ pub(super) fn inspect_top<P: Px>(
     {
         return first;
     }
-    let Some(w) = tip_width(plane, recipe.polarity.sign(), recipe) else {
-        return first;
-    };
-    let mut one = recipe.clone();
-    let mm_per_px = recipe.pin_mm / w;
-    one.mm_per_px = Some(mm_per_px);
-    match super::top::inspect_top(&one, plane, info, full_scale, opts) {
-        Ok(mut ins) => {
+    if let Some(w) = tip_width(plane, recipe.polarity.sign(), recipe) {
+        let mut one = recipe.clone();
+        let mm_per_px = recipe.pin_mm / w;
+        one.mm_per_px = Some(mm_per_px);
+        if let Ok(mut ins) = super::top::inspect_top(&one, plane, info.clone(), full_scale, opts) {
             ins.grid.mm_per_px_estimated = true;
             ins.warnings.push(format!(
                 "no lattice of tips gives the scale: mm_per_px estimated from one tip's width ({w:.1} px): {mm_per_px:.5}"
             ));
-            Ok(ins)
+            return Ok(ins);
         }
-        Err(_) => first,
     }
+    // Last: the inspection at its own estimate, a single tip found on a
+    // part of a few positions giving the scale by its area (Rust 955 323,
+    // a 1 × 3 with both end pins missing, whose strongest blob over the
+    // ladder was no whole tip).
+    super::top::inspect_top_with(recipe, plane, info, full_scale, opts, true).or(first)
 }

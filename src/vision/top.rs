@@ -27,6 +27,7 @@ use super::top_candidates::{
     add_faint_debris, assign_to_positions, faint_tips_to_add, last_resort_search,
     measure_candidates,
 };
+use super::top_first_fit::FitPoints;
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
 /// the grid's pose (four parameters, or three with mm_per_px known): the
@@ -45,6 +46,20 @@ pub fn inspect_top<P: Px>(
     info: ImageInfo,
     full_scale: f32,
     opts: &InspectOptions,
+) -> Result<Inspection, VisionError> {
+    inspect_top_with(recipe, plane, info, full_scale, opts, false)
+}
+
+/// [`inspect_top`], where `one_tip_scale` lets a single tip found on a
+/// part of a few positions give the scale by its area (the last resort of
+/// `scale_one_tip`, after the search at one tip's width).
+pub(crate) fn inspect_top_with<P: Px>(
+    recipe: &Recipe,
+    plane: &Plane<P>,
+    info: ImageInfo,
+    full_scale: f32,
+    opts: &InspectOptions,
+    one_tip_scale: bool,
 ) -> Result<Inspection, VisionError> {
     let sign = recipe.polarity.sign();
     let part = recipe.part_number.clone();
@@ -216,7 +231,13 @@ pub fn inspect_top<P: Px>(
     if placement.ambiguous {
         let (rows, cols) = (recipe.rows, recipe.cols);
         if let Some(p) = super::top_window::settle_by_evidence(
-            &cs, &lat, &members, rows, cols, &skipped, &placement,
+            &cs,
+            &lat,
+            &members,
+            (rows, cols),
+            &skipped,
+            &placement,
+            pin_px0,
         ) {
             placement = p;
             by_evidence = true;
@@ -257,24 +278,13 @@ pub fn inspect_top<P: Px>(
 
     // Robust fit of the nominal grid to the pins (damaged tips left out).
     let [ta_lo, ta_hi] = recipe.tip_area();
-    let (mut model, mut image) = (Vec::new(), Vec::new());
-    let (mut model_all, mut image_all) = (Vec::new(), Vec::new());
-    for (c, i) in cands.iter().zip(&idx) {
-        if let Some((r, col)) = i.as_ref().and_then(in_window) {
-            let uv = recipe.nominal_uv_mm(r, col);
-            model_all.push(uv);
-            image_all.push((c.m.x, c.m.y));
-            let a = c.m.area_px / tip_px0;
-            if a >= ta_lo && a <= ta_hi {
-                model.push(uv);
-                image.push((c.m.x, c.m.y));
-            }
-        }
-    }
-    if model.len() < 2 {
-        model = model_all;
-        image = image_all;
-    }
+    let in_win: Vec<(usize, (u32, u32))> = idx
+        .iter()
+        .enumerate()
+        .filter_map(|(ci, i)| i.as_ref().and_then(in_window).map(|rc| (ci, rc)))
+        .collect();
+    let few = if one_tip_scale { FEW_PINS + 1 } else { 0 };
+    let points = FitPoints::of(&cands, &in_win, recipe, tip_px0, few);
     let fixed = recipe.mm_per_px.map(|_| s0);
     let lat_s = lat.px / px_mm;
     let centre_lat = (
@@ -288,27 +298,13 @@ pub fn inspect_top<P: Px>(
         tx: c0.0,
         ty: c0.1,
     };
-    let (mut sim, mut inliers, mut rms) = if model.len() >= 2 {
-        let tau = recipe.tolerance.position_mm * init.s;
-        match fit::consensus_similarity(&model, &image, fixed, Some(init), 0.1, tau) {
-            Some(f) => {
-                let n = f.inlier.iter().filter(|b| **b).count();
-                (f.sim, n, f.rms_px)
-            }
-            None => (init, 0, f64::NAN),
-        }
-    } else if model.len() == 1 {
-        // One pin: translation from it, rotation from the lattice (0 without neighbours).
-        let mut s = init;
-        let q = s.apply(model[0].0, model[0].1);
-        s.tx += image[0].0 - q.0;
-        s.ty += image[0].1 - q.1;
-        warnings.push("only one pin found: grid rotation taken as the image axes'".into());
-        (s, 1, 0.0)
-    } else {
-        (init, 0, f64::NAN)
-    };
-    if fixed.is_none() && model.len() < 2 {
+    let (mut sim, mut inliers, mut rms) = points.first_fit(recipe, init, fixed, &mut warnings);
+    let FitPoints {
+        model,
+        image,
+        one_area,
+    } = points;
+    if fixed.is_none() && model.len() < 2 && one_area.is_none() {
         return Err(VisionError::NoPins {
             part,
             msg: "cannot estimate mm_per_px from fewer than two pins".into(),
@@ -384,9 +380,12 @@ pub fn inspect_top<P: Px>(
     }
     let mut mm_per_px = 1.0 / sim.s;
     if fixed.is_none() {
-        warnings.push(format!(
-            "mm_per_px estimated from the pitch: {mm_per_px:.5}"
-        ));
+        let from = if one_area.is_some() {
+            "the tip's area"
+        } else {
+            "the pitch"
+        };
+        warnings.push(format!("mm_per_px estimated from {from}: {mm_per_px:.5}"));
     }
     let tip_px = recipe.tip_area_mm2() * sim.s * sim.s;
 
@@ -642,6 +641,13 @@ pub fn inspect_top<P: Px>(
         }
         if tip_bright || dim || whole.is_some() {
             dim_tip[pi] = dim;
+            // A blob left unassigned at this very place is this tip
+            // measured in another window, not debris beside it.
+            for (ci, c) in cands.iter().enumerate() {
+                if (c.m.x - m.x).hypot(c.m.y - m.y) < 0.5 * pin_px {
+                    cand_used[ci] = true;
+                }
+            }
             let pinlike = m.elongation < 3.0;
             cands.push(Candidate {
                 m,

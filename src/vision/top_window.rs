@@ -19,29 +19,56 @@ use super::grid::{self, Lattice, Placement};
 /// must exceed the housing's pick before it overrules it.
 const EVIDENCE_SIGMAS: f64 = 3.0;
 
-/// Tip evidence of one lattice node: the coarse top-hat there over the
-/// tips' typical contrast, clamped to [0, 1] (a bright housing edge counts
-/// no more than a tip).
-fn node_evidence(th: &Coarse, lat: &Lattice, tip_contrast: f32, a: i64, b: i64) -> f64 {
-    let p = lat.to_image(a as f64, b as f64);
+/// The least evidence gain that overrules the pick, in tips, however clean
+/// the image: structure (a housing edge) is not noise.
+const MIN_GAIN: f64 = 0.3;
+
+/// How far around a node its evidence is averaged, in tip widths either
+/// side: the top-hat at one point holds one sample of noise, the tip's core
+/// a whole patch of it. Rust 955 104 (6.5 px tips at σ 11.5 DN, blur
+/// 2.5 px): the missed end tip's single-point evidence beat the empty place
+/// beyond the part's other end by 0.525 against a margin of 0.526, and the
+/// window stood a pitch off.
+const NODE_REACH_TIP: f64 = 0.25;
+
+/// The coarse top-hat averaged over a (2r + 1)² patch of coarse pixels
+/// around a full-resolution point; `None` outside the image.
+fn patch_mean(th: &Coarse, p: (f64, f64), r: i64) -> Option<f64> {
     let (cx, cy) = th.from_full(p.0, p.1);
-    if cx < 0.0 || cy < 0.0 || cx > (th.w - 1) as f64 || cy > (th.h - 1) as f64 {
-        return 0.0;
+    let (xmax, ymax) = ((th.w - 1) as f64, (th.h - 1) as f64);
+    if cx < 0.0 || cy < 0.0 || cx > xmax || cy > ymax {
+        return None;
     }
-    (th.bilinear(cx, cy) / tip_contrast.max(1e-6)).clamp(0.0, 1.0) as f64
+    let mut sum = 0.0;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            sum += th.bilinear(cx + dx as f64, cy + dy as f64) as f64;
+        }
+    }
+    Some(sum / ((2 * r + 1) * (2 * r + 1)) as f64)
+}
+
+/// Tip evidence of one lattice node: the coarse top-hat around it (a patch
+/// of `r` coarse pixels either side) over what that patch holds on a tip,
+/// clamped to [0, 1] (a bright housing edge counts no more than a tip).
+fn node_evidence(th: &Coarse, lat: &Lattice, tip_unit: f64, r: i64, a: i64, b: i64) -> f64 {
+    let p = lat.to_image(a as f64, b as f64);
+    patch_mean(th, p, r).map_or(0.0, |v| (v / tip_unit).clamp(0.0, 1.0))
 }
 
 /// The placement among those tied with `picked` (same count of members
 /// covered) whose window holds clearly more tip evidence than `picked`'s;
 /// `None` when `picked` is best or the difference is within the noise.
+/// `(rows, cols)` is the recipe's window; `pin_px` the tip's width, which
+/// sets the patch the evidence is averaged over.
 pub(crate) fn settle_by_evidence(
     cs: &CoarseSearch,
     lat: &Lattice,
     members: &[(i64, i64)],
-    rows: u32,
-    cols: u32,
+    (rows, cols): (u32, u32),
     skipped: &dyn Fn(u32, u32) -> bool,
     picked: &Placement,
+    pin_px: f64,
 ) -> Option<Placement> {
     let (_, ties) = grid::best_placements(members, rows, cols, skipped)?;
     if ties.len() < 2 || !(cs.tip_contrast > 0.0) {
@@ -54,11 +81,40 @@ pub(crate) fn settle_by_evidence(
         data: cs.tophat.clone(),
         quantum: cs.coarse.quantum,
     };
-    // The top-hat's noise (robust spread, mostly background), in tip units.
-    let mut sample: Vec<f64> = cs.tophat.iter().step_by(7).map(|&v| v as f64).collect();
-    let med = grid::median(&mut sample)?;
-    let mut dev: Vec<f64> = sample.iter().map(|v| (v - med).abs()).collect();
-    let sigma = 1.4826 * grid::median(&mut dev)? / cs.tip_contrast as f64;
+    let (k, c) = (th.k as f64, (th.k as f64 - 1.0) / 2.0);
+    // The noise of the evidence averaged over patches of `r` (robust
+    // spread over a sample of patches, mostly background) and a tip's
+    // evidence under it: the tips' typical contrast, or what the same
+    // patch holds on the members (their median) where that is less (a
+    // patch over a round or blurred tip holds less than its peak).
+    let noise_and_unit = |r: i64| -> Option<(f64, f64)> {
+        let mut sample: Vec<f64> = (0..th.h)
+            .step_by(5)
+            .flat_map(|y| (0..th.w).step_by(5).map(move |x| (x, y)))
+            .filter_map(|(x, y)| patch_mean(&th, (x as f64 * k + c, y as f64 * k + c), r))
+            .collect();
+        let med = grid::median(&mut sample)?;
+        let mut dev: Vec<f64> = sample.iter().map(|v| (v - med).abs()).collect();
+        let mut at_members: Vec<f64> = members
+            .iter()
+            .filter_map(|&(a, b)| patch_mean(&th, lat.to_image(a as f64, b as f64), r))
+            .collect();
+        let unit = grid::median(&mut at_members)
+            .filter(|&u| u > 0.0)
+            .map_or(cs.tip_contrast as f64, |u| u.min(cs.tip_contrast as f64));
+        Some((1.4826 * grid::median(&mut dev)? / unit, unit))
+    };
+    // Averaged only where the noise, not the floor, sets the margin: a
+    // patch holds less of a small (damaged) tip than its peak does.
+    let (sigma0, unit0) = noise_and_unit(0)?;
+    let patch_r = (NODE_REACH_TIP * pin_px / k).round().max(0.0) as i64;
+    let (r, sigma, tip_unit) =
+        if patch_r > 0 && EVIDENCE_SIGMAS * sigma0 * std::f64::consts::SQRT_2 > MIN_GAIN {
+            let (s, u) = noise_and_unit(patch_r)?;
+            (patch_r, s, u)
+        } else {
+            (0, sigma0, unit0)
+        };
     let nodes = |row0: i64, col0: i64| -> Vec<(i64, i64)> {
         let mut v = Vec::new();
         for r in 0..rows {
@@ -72,7 +128,7 @@ pub(crate) fn settle_by_evidence(
     };
     let evidence = |n: &[(i64, i64)]| -> f64 {
         n.iter()
-            .map(|&(a, b)| node_evidence(&th, lat, cs.tip_contrast, a, b))
+            .map(|&(a, b)| node_evidence(&th, lat, tip_unit, r, a, b))
             .sum()
     };
     let mine = nodes(picked.row0, picked.col0);
@@ -94,7 +150,7 @@ pub(crate) fn settle_by_evidence(
             .collect();
         let gain = evidence(&only_theirs) - evidence(&only_mine);
         let n_diff = (only_theirs.len() + only_mine.len()) as f64;
-        let margin = (EVIDENCE_SIGMAS * sigma * n_diff.sqrt()).max(0.3);
+        let margin = (EVIDENCE_SIGMAS * sigma * n_diff.sqrt()).max(MIN_GAIN);
         if gain > margin && best.is_none_or(|b| gain > b.0) {
             best = Some((gain, (row0, col0)));
         }
@@ -117,6 +173,11 @@ mod tests {
     /// on noise of σ 0.1 (tip units; the coarse search's 6 σ floor is then
     /// 0.6 of a tip); nodes past the row's far end hold nothing.
     fn search(levels: &[f32], seed: u64) -> (CoarseSearch, Lattice) {
+        search_noisy(levels, seed, 0.0, 0.1)
+    }
+
+    /// The same with the top-hat's noise of σ `noise` about a floor `base`.
+    fn search_noisy(levels: &[f32], seed: u64, base: f32, noise: f64) -> (CoarseSearch, Lattice) {
         let (w, h) = (400usize, 60usize);
         let lat = Lattice {
             theta: 0.0,
@@ -128,7 +189,7 @@ mod tests {
         let mut th = vec![0f32; w * h];
         for y in 0..h {
             for x in 0..w {
-                let mut v = (0.1 * rng.normal()) as f32;
+                let mut v = base + (noise * rng.normal()) as f32;
                 for (i, &l) in levels.iter().enumerate() {
                     let (nx, ny) = lat.to_image(i as f64, 0.0);
                     let d2 = (x as f64 - nx).powi(2) + (y as f64 - ny).powi(2);
@@ -178,22 +239,53 @@ mod tests {
                 let mut levels = vec![1.0f32; 8];
                 levels[0] = faint;
                 let (cs, lat) = search(&levels, seed);
-                let p = settle_by_evidence(&cs, &lat, &members, 1, 8, &none, &off);
+                let p = settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &off, 6.0);
                 assert_eq!(p.map(|p| p.col0), Some(0), "faint {faint} seed {seed}");
-                let p = settle_by_evidence(&cs, &lat, &members, 1, 8, &none, &right);
+                let p = settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &right, 6.0);
                 assert_eq!(p, None, "faint {faint} seed {seed}");
             }
             let mut levels = vec![1.0f32; 8];
             levels[0] = 0.0;
             let (cs, lat) = search(&levels, seed);
             assert_eq!(
-                settle_by_evidence(&cs, &lat, &members, 1, 8, &none, &off),
+                settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &off, 6.0),
                 None
             );
             assert_eq!(
-                settle_by_evidence(&cs, &lat, &members, 1, 8, &none, &right),
+                settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &right, 6.0),
                 None
             );
+        }
+    }
+
+    /// Under noise (σ 0.3 of a tip per pixel) one point per node cannot
+    /// tell a tip (0.8 of the others, missed) from an empty place: the
+    /// margin is 3 σ √2 = 1.3 tips. The mean over a patch of a quarter tip
+    /// either side (8 px tips: 5 × 5 px) can, and still leaves a right pick
+    /// alone and an undecided one undecided (Rust 955 104).
+    #[test]
+    fn under_noise_the_evidence_is_averaged_over_the_tips_core() {
+        let none = |_: u32, _: u32| false;
+        let members: Vec<(i64, i64)> = (1..8).map(|a| (a, 0)).collect();
+        let off = Placement {
+            col0: 1,
+            row0: 0,
+            score: 7,
+            ambiguous: true,
+        };
+        let right = Placement { col0: 0, ..off };
+        for seed in 1..=5 {
+            let mut levels = vec![1.0f32; 8];
+            levels[0] = 0.8;
+            let (cs, lat) = search_noisy(&levels, seed, 0.5, 0.3);
+            let p = settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &off, 8.0);
+            assert_eq!(p.map(|p| p.col0), Some(0), "seed {seed}");
+            let p = settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &right, 8.0);
+            assert_eq!(p, None, "seed {seed}");
+            levels[0] = 0.0;
+            let (cs, lat) = search_noisy(&levels, seed, 0.5, 0.3);
+            let p = settle_by_evidence(&cs, &lat, &members, (1, 8), &none, &off, 8.0);
+            assert_eq!(p, None, "seed {seed}: no evidence either way");
         }
     }
 }

@@ -17,6 +17,20 @@
 //! - 925 198: a 1 × 12 with 25 px dark tips, its end tip 11.6 px from a
 //!   dark housing patch of 20 tips' area: a rule without the larger blob's
 //!   size took the tip for a piece of the patch (a wrong Fail).
+//! - 955 085: a 3 × 9 under blur 2.4 px on 5.8 px tips, no `mm_per_px`.
+//!   Blur grows every tip's coverage area to 1.5–1.9 × nominal, so against
+//!   the nominal only two tips of 25 entered the first grid fit (the
+//!   others read "damaged"); their exact fit stood 8 % off in scale, three
+//!   tips fell outside their positions' reach, were found again by the
+//!   empty positions' second look, and their first blobs were counted as
+//!   debris (a wrong Fail). A damaged tip is now told by its area against
+//!   its peers' median.
+//! - 955 104: a 1 × 7 with 6.5 px tips at σ 11.5 DN and blur 2.5 px, the
+//!   end tips missed by the coarse search. The noisy housing profiles
+//!   placed the window a pitch off, and the tips' evidence for the right
+//!   window (the top-hat at one point per node) beat it by 0.525 against a
+//!   margin of 0.526. The evidence is now averaged over a patch of a
+//!   quarter tip either side where the noise sets the margin.
 
 use crate::common;
 use pinsight::vision::synth_envelope::Rendered;
@@ -52,5 +66,24 @@ fn a_piece_of_a_tip_is_not_a_second_blob_and_a_tip_not_a_piece_of_a_patch() {
             c.status_mismatches
         );
         assert_eq!(c.extras_spurious, 0, "{seed}");
+    }
+}
+
+#[test]
+fn a_blurred_parts_grid_is_fitted_to_all_its_tips_and_a_noisy_end_found_by_evidence() {
+    for seed in [955_085u64, 955_104] {
+        let (case, r, ins) = common::envelope_case(seed);
+        let c = r.compare(&case.factors, &ins);
+        assert!(c.verdict_ok, "{seed}: verdict wrong: {:?}", ins.verdict);
+        assert!(
+            c.status_mismatches.is_empty(),
+            "{seed}: {:?}",
+            c.status_mismatches
+        );
+        assert_eq!(c.extras_spurious, 0, "{seed}");
+        let worst = Rendered::ok_centre_errors(&c)
+            .into_iter()
+            .fold(0.0, f64::max);
+        assert!(worst < 1.5, "{seed}: an ok pin's centre {worst:.2} px off");
     }
 }

@@ -183,3 +183,27 @@ fn a_missing_pins_bright_hole_under_blur_is_not_a_tip() {
         assert_eq!(p.status, PinStatus::Ok, "{:?}", (p.row, p.col));
     }
 }
+
+/// A dark 1 × 3 part with both end pins missing (955 323, 30 px tips): the
+/// scale search's one-tip width read 38 px, and the one tip found then
+/// gave the grid no scale, so the image ended as an error although its
+/// two empty positions make it a plain Fail. One tip found of a few
+/// positions now gives the scale by its own measured area, and the
+/// report says its area is not judged.
+#[test]
+fn one_tip_found_of_three_gives_the_scale_by_its_area() {
+    let (case, r, ins) = common::envelope_case(955_323);
+    assert!(case.recipe.mm_per_px.is_none());
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    let ratio = ins.grid.mm_per_px / case.factors.mm_per_px;
+    assert!((ratio - 1.0).abs() < 0.03, "scale {ratio:.3} × truth");
+    assert!(
+        ins.warnings
+            .iter()
+            .any(|w| w.contains("from its tip's area")),
+        "{:?}",
+        ins.warnings
+    );
+}
