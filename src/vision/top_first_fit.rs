@@ -6,6 +6,12 @@ use super::grid;
 use super::recipe::Recipe;
 use super::tip_levels::Candidate;
 
+/// The fewest tips in the window whose median area is the reference for a
+/// whole tip: on a 2 × 2 with one tip damaged and one bent (Rust 960 554)
+/// the median of four let the damaged tip in, and the fit of three turned
+/// by 6.5° to absorb the bend (read ok); a few tips keep the nominal.
+const MIN_PEERS: usize = 5;
+
 /// The pins the first fit uses: nominal part-frame points (mm) and the
 /// tips' image points (px), and the one tip's area when only one is found
 /// on a part of a few positions (the scale's last resort).
@@ -20,7 +26,7 @@ impl FitPoints {
     /// whose area is a whole tip's, or all of them when fewer than two are.
     ///
     /// A damaged tip is told by its area against its peers' median (or
-    /// `tip_px0` with fewer than three): blur grows every coverage area
+    /// `tip_px0` with fewer than [`MIN_PEERS`]): blur grows every coverage area
     /// alike (Rust 955 085, blur 2.4 px on 5.8 px tips: 1.46–1.87 ×
     /// nominal), and against the nominal only two tips of 25 were kept,
     /// whose exact fit stood 8 % off in scale and 2° off in rotation, so
@@ -41,7 +47,7 @@ impl FitPoints {
         let [ta_lo, ta_hi] = recipe.tip_area();
         let mut areas: Vec<f64> = in_win.iter().map(|&(ci, _)| cands[ci].m.area_px).collect();
         let area_ref = match grid::median(&mut areas) {
-            Some(m) if in_win.len() >= 3 && m > 0.0 => m,
+            Some(m) if in_win.len() >= MIN_PEERS && m > 0.0 => m,
             _ => tip_px0,
         };
         let (mut model, mut image, mut area) = (Vec::new(), Vec::new(), Vec::new());

@@ -216,6 +216,22 @@ mod tests {
         (cs, lat)
     }
 
+    /// Members at nodes 1–7 of a 1 × 8 window, and the placements one
+    /// pitch off (nodes 1–8) and right (0–7).
+    fn seven_members() -> (Vec<(i64, i64)>, Placement, Placement) {
+        let off = Placement {
+            col0: 1,
+            row0: 0,
+            score: 7,
+            ambiguous: true,
+        };
+        (
+            (1..8).map(|a| (a, 0)).collect(),
+            off,
+            Placement { col0: 0, ..off },
+        )
+    }
+
     /// The end tip (node 0) is faint, below the coarse search's noise
     /// floor (0.5–0.55 of a tip against 6 σ = 0.6), so it is
     /// no member: the window at nodes 0–7 and the one at 1–8 cover the
@@ -226,14 +242,7 @@ mod tests {
     #[test]
     fn a_missed_end_tip_places_the_window_by_its_contrast() {
         let none = |_: u32, _: u32| false;
-        let members: Vec<(i64, i64)> = (1..8).map(|a| (a, 0)).collect();
-        let off = Placement {
-            col0: 1,
-            row0: 0,
-            score: 7,
-            ambiguous: true,
-        };
-        let right = Placement { col0: 0, ..off };
+        let (members, off, right) = seven_members();
         for seed in 1..=5 {
             for faint in [0.5f32, 0.55] {
                 let mut levels = vec![1.0f32; 8];
@@ -266,14 +275,7 @@ mod tests {
     #[test]
     fn under_noise_the_evidence_is_averaged_over_the_tips_core() {
         let none = |_: u32, _: u32| false;
-        let members: Vec<(i64, i64)> = (1..8).map(|a| (a, 0)).collect();
-        let off = Placement {
-            col0: 1,
-            row0: 0,
-            score: 7,
-            ambiguous: true,
-        };
-        let right = Placement { col0: 0, ..off };
+        let (members, off, right) = seven_members();
         for seed in 1..=5 {
             let mut levels = vec![1.0f32; 8];
             levels[0] = 0.8;

@@ -54,36 +54,34 @@ fn a_long_part_under_noise_is_placed_on_its_own_tips() {
     );
 }
 
+/// Inspects `seed` and asserts its verdict, every pin status and the
+/// absence of spurious extras; returns its worst ok-pin centre error (px).
+fn right_and_clean(seed: u64) -> f64 {
+    let (case, r, ins) = common::envelope_case(seed);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "{seed}: verdict wrong: {:?}", ins.verdict);
+    assert!(
+        c.status_mismatches.is_empty(),
+        "{seed}: {:?}",
+        c.status_mismatches
+    );
+    assert_eq!(c.extras_spurious, 0, "{seed}");
+    Rendered::ok_centre_errors(&c)
+        .into_iter()
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn a_piece_of_a_tip_is_not_a_second_blob_and_a_tip_not_a_piece_of_a_patch() {
     for seed in [925_116u64, 925_198] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(c.verdict_ok, "{seed}: verdict wrong: {:?}", ins.verdict);
-        assert!(
-            c.status_mismatches.is_empty(),
-            "{seed}: {:?}",
-            c.status_mismatches
-        );
-        assert_eq!(c.extras_spurious, 0, "{seed}");
+        right_and_clean(seed);
     }
 }
 
 #[test]
 fn a_blurred_parts_grid_is_fitted_to_all_its_tips_and_a_noisy_end_found_by_evidence() {
     for seed in [955_085u64, 955_104] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(c.verdict_ok, "{seed}: verdict wrong: {:?}", ins.verdict);
-        assert!(
-            c.status_mismatches.is_empty(),
-            "{seed}: {:?}",
-            c.status_mismatches
-        );
-        assert_eq!(c.extras_spurious, 0, "{seed}");
-        let worst = Rendered::ok_centre_errors(&c)
-            .into_iter()
-            .fold(0.0, f64::max);
+        let worst = right_and_clean(seed);
         assert!(worst < 1.5, "{seed}: an ok pin's centre {worst:.2} px off");
     }
 }
