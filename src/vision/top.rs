@@ -25,7 +25,7 @@ use super::tip_levels::{
 };
 use super::top_candidates::{
     add_faint_debris, assign_to_positions, faint_tips_to_add, last_resort_search,
-    measure_candidates,
+    measure_candidates, use_blobs_at,
 };
 use super::top_first_fit::FitPoints;
 
@@ -641,13 +641,7 @@ pub(crate) fn inspect_top_with<P: Px>(
         }
         if tip_bright || dim || whole.is_some() {
             dim_tip[pi] = dim;
-            // A blob left unassigned at this very place is this tip
-            // measured in another window, not debris beside it.
-            for (ci, c) in cands.iter().enumerate() {
-                if (c.m.x - m.x).hypot(c.m.y - m.y) < 0.5 * pin_px {
-                    cand_used[ci] = true;
-                }
-            }
+            use_blobs_at(&cands, &mut cand_used, (m.x, m.y), 0.5 * pin_px);
             let pinlike = m.elongation < 3.0;
             cands.push(Candidate {
                 m,

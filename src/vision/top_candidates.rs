@@ -282,3 +282,14 @@ pub(super) fn assign_to_positions(
     }
     (pos_cand, used)
 }
+
+/// Marks used every candidate within `r` px of `at`: where the empty
+/// positions' second look finds a tip, a blob left unassigned at that very
+/// place is the same tip measured in another window, not debris beside it.
+pub(super) fn use_blobs_at(cands: &[Candidate], used: &mut [bool], at: (f64, f64), r: f64) {
+    for (ci, c) in cands.iter().enumerate() {
+        if (c.m.x - at.0).hypot(c.m.y - at.1) < r {
+            used[ci] = true;
+        }
+    }
+}
