@@ -29,6 +29,8 @@ struct Outcome {
     ok_sq: Vec<f64>,
     /// Top view, truly ok pins: (centre error px, Cramér–Rao bound px).
     top_ok: Vec<(f64, f64)>,
+    /// Side view: measured − true height of each pin measured, px.
+    h_err_px: Vec<f64>,
     detail: String,
     secs_inspect: f64,
 }
@@ -84,6 +86,7 @@ fn main() {
                 pin_wrong: 0,
                 ok_sq: Vec::new(),
                 top_ok: Vec::new(),
+                h_err_px: Vec::new(),
                 detail: String::new(),
                 secs_inspect,
             };
@@ -98,6 +101,7 @@ fn main() {
                     o.verdict_ok = c.verdict_ok;
                     o.pin_wrong = c.status_mismatches.len();
                     o.ok_sq = Rendered::ok_centre_errors(&c).iter().map(|e| e * e).collect();
+                    o.h_err_px = c.height_errors.iter().map(|e| e / case.factors.mm_per_px).collect();
                     if bound {
                         let b = case.centre_bounds();
                         o.top_ok = c
@@ -192,6 +196,17 @@ fn report(o: &[Outcome], wall: f64, list: bool) {
         pct(pins - pins_wrong, pins),
         sq.len()
     );
+    let mut h: Vec<f64> = o.iter().flat_map(|x| x.h_err_px.iter().cloned()).collect();
+    if !h.is_empty() {
+        let mean = h.iter().sum::<f64>() / h.len() as f64;
+        let rms = (h.iter().map(|e| e * e).sum::<f64>() / h.len() as f64).sqrt();
+        h.sort_by(|a, b| a.total_cmp(b));
+        println!(
+            "side-view pin heights: error mean {mean:+.3} px, RMS {rms:.3} px, median {:+.3} px over {} pins",
+            h[h.len() / 2],
+            h.len()
+        );
+    }
     let bounded: Vec<(f64, f64)> = o.iter().flat_map(|x| x.top_ok.iter().cloned()).collect();
     if !bounded.is_empty() {
         let rms = |v: &[f64]| (v.iter().map(|e| e * e).sum::<f64>() / v.len().max(1) as f64).sqrt();
@@ -399,7 +414,7 @@ fn show(seed: u64) {
             );
             for (p, t) in ins.pins.iter().zip(&r.truth.pins) {
                 println!(
-                    "  ({},{}) {:?} (truth {:?}) at {:?},{:?} truth {:?},{:?} nominal {:.1},{:.1} area {:?} off {:?}",
+                    "  ({},{}) {:?} (truth {:?}) at {:?},{:?} truth {:?},{:?} nominal {:.1},{:.1} area {:?} off {:?} height {:?} (truth {:?})",
                     p.row,
                     p.col,
                     p.status,
@@ -411,7 +426,9 @@ fn show(seed: u64) {
                     p.nominal_x_px,
                     p.nominal_y_px,
                     p.area_ratio,
-                    p.offset_mm
+                    p.offset_mm,
+                    p.height_mm,
+                    t.height_mm
                 );
             }
             for e in &ins.extras {
