@@ -27,8 +27,8 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::side_bar::{BarEnd, BarWindow, RowRef, look_again, measure_bar};
 use super::side_edge::{
-    BarMask, body_x_range, drop_steep_tops, edge_profile, run_tops, silhouette_level,
-    silhouette_threshold,
+    BACKLIGHT, BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, run_tops,
+    silhouette_level, silhouette_threshold, solid_block,
 };
 use super::side_end::{EndAt, row_end_offset};
 use super::side_row::{
@@ -59,7 +59,12 @@ const DUST_MIN_CONTRAST: f64 = 0.4;
 /// small one, blurred, still about half way).
 const DUST_MIN_CORE: f64 = 0.5 * DUST_MIN_CONTRAST;
 
-/// Inspects one side-view image.
+/// Inspects one side-view image. When the housing is not found (or no pin
+/// on what was taken for it), its edge is sought again with the runs read
+/// on the coarse image's 3 × 3 mean: noise pricks holes in a low-contrast
+/// housing and speckles a dim band above it, and the band's tops then
+/// outnumbered the block's (965 068, contrast 0.37). Smoothed first, a
+/// mottled backlight's patches outran a thin housing (Python 590 048).
 pub fn inspect_side<P: Px>(
     recipe: &Recipe,
     plane: &Plane<P>,
@@ -68,6 +73,23 @@ pub fn inspect_side<P: Px>(
     opts: &InspectOptions,
 ) -> Result<Inspection, VisionError> {
     let _ = opts;
+    match inspect_side_runs(recipe, plane, info.clone(), full_scale, false) {
+        Err(e @ (VisionError::NoHousing(_) | VisionError::NoPins { .. })) => {
+            inspect_side_runs(recipe, plane, info, full_scale, true).map_err(|_| e)
+        }
+        r => r,
+    }
+}
+
+/// [`inspect_side`] with the housing edge's runs read on the raw coarse
+/// image or (`smooth_runs`) on its 3 × 3 box mean.
+fn inspect_side_runs<P: Px>(
+    recipe: &Recipe,
+    plane: &Plane<P>,
+    info: ImageInfo,
+    full_scale: f32,
+    smooth_runs: bool,
+) -> Result<Inspection, VisionError> {
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
     // Silhouette is bright in `sign` space.
@@ -89,6 +111,9 @@ pub fn inspect_side<P: Px>(
     }
     let (cw, ch) = (coarse.w, coarse.h);
     let mut t = detect::otsu(&coarse.data, cw, ch);
+    // The silhouette's depth below the backlight (share of it), where the
+    // backlight is divided out.
+    let mut depth: Option<f32> = None;
     if sign < 0.0 {
         // What the cubic backlight leaves, flattened over about 36 px
         // (bands and patches wider than that), the silhouette's level
@@ -100,6 +125,7 @@ pub fn inspect_side<P: Px>(
             t = detect::otsu(&coarse.data, cw, ch);
         }
         t = silhouette_threshold(&coarse.data, t);
+        depth = silhouette_level(&coarse.data, t).map(|l| (l - BACKLIGHT) / -BACKLIGHT);
     }
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
@@ -111,7 +137,12 @@ pub fn inspect_side<P: Px>(
     let min_run = pin_px_prior.map_or(3, |p| {
         ((0.5 * p / k as f64) as usize).clamp(3, (ch / 40).max(3))
     });
-    let tops = run_tops(cw, ch, &fg, min_run);
+    let smooth = smooth_runs.then(|| super::morph::box_mean(&coarse.data, cw, ch, 1));
+    let fg_s = |x: usize, y: usize| match &smooth {
+        Some(m) => m[y * cw + x] > t,
+        None => fg(x, y),
+    };
+    let tops = run_tops(cw, ch, &fg_s, min_run);
     let tops = drop_steep_tops(&tops);
     let no_housing =
         |msg: &str| VisionError::NoHousing(format!("{msg} (recipe {part}, side view)"));
@@ -186,9 +217,17 @@ pub fn inspect_side<P: Px>(
     // And a pin's end lies inside the frame: silhouette reaching the
     // frame's top border (backlight along a border the flattening took for
     // silhouette, 820 466) is no pin; it is judged as dust on the untouched
-    // image.
-    let pin_like =
-        |b: &label::Blob| b.y_min > 0 && b.width() as f64 >= 0.5 * pin_px_prior / k as f64;
+    // image. Nor, with the scale known, is a blob two pitches wide (965 068:
+    // a dim band joined to the tips was a "bar" of 486 tips; a width
+    // measured without the scale, 3 px on Python 590 048, cut every pin).
+    let widest = match recipe.mm_per_px {
+        Some(_) => 2.0 * pin_px_prior * recipe.pitch_mm[0] / recipe.pin_mm / k as f64,
+        None => f64::INFINITY,
+    };
+    let pin_like = |b: &label::Blob| {
+        let w = b.width() as f64;
+        b.y_min > 0 && w >= 0.5 * pin_px_prior / k as f64 && w <= widest
+    };
     for b in &lab.blobs {
         if touches_edge(b)
             && pin_like(b)
@@ -231,7 +270,7 @@ pub fn inspect_side<P: Px>(
                 let mut top: Vec<f32> = prof[..3].to_vec();
                 let mut bot: Vec<f32> = prof[prof.len() - 3..].to_vec();
                 let (lo, hi) = (median_f32(&mut top), median_f32(&mut bot));
-                if hi - lo > 0.3 * contrast
+                if clear_step(lo, hi, contrast, depth)
                     && let Some(f) = first_rise(&prof, 0.5 * (lo + hi))
                 {
                     edge_pts.push((xf, y0 as f64 + f));
@@ -329,23 +368,8 @@ pub fn inspect_side<P: Px>(
     // scale, or, without `mm_per_px`, with the block taken as `cols`
     // pitches long (no pin is there to measure the scale from; said in a
     // note).
-    // A side view's housing is an opaque block: below its top edge every
-    // column of the silhouette runs on about equally far. A top view
-    // inspected with a side recipe shows its tips and holes there, which cut
-    // the runs of the columns through them short: that stays an error.
-    let solid_block = || {
-        let mut runs: Vec<f64> = (hx0_c..=hx1_c.min(cw.saturating_sub(1)))
-            .map(|x| {
-                let y0 = (edge_c(x as f64) + 2.0).ceil().max(0.0) as usize;
-                (y0..ch).take_while(|&y| fg(x, y)).count() as f64
-            })
-            .collect();
-        runs.sort_by(|a, b| a.total_cmp(b));
-        let q = |f: f64| runs.get(((runs.len() as f64 - 1.0) * f) as usize).copied();
-        matches!((q(0.25), q(0.5)), (Some(lo), Some(med)) if med >= 2.0 && lo >= 0.7 * med)
-    };
     let placed = if bars.is_empty() {
-        if !solid_block() {
+        if !solid_block((hx0_c, hx1_c.min(cw.saturating_sub(1))), ch, &edge_c, &fg) {
             return Err(VisionError::NoPins {
                 part,
                 msg: "no pin standing on the housing".into(),
