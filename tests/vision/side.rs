@@ -46,9 +46,10 @@ fn a_good_pin_whose_half_profile_is_lost_in_the_noise_is_not_missing() {
 /// above the edge).
 #[test]
 fn a_housing_under_a_dim_band_or_corner_of_backlight_is_found_and_its_pins_read() {
-    for seed in [965_068u64, 965_147] {
+    // Two good parts, and a failed one (945 355, a pin missing) whose grid
+    // must stand on its pins, not a pitch off along the housing.
+    for seed in [965_068u64, 965_147, 945_355] {
         let (case, r, ins) = common::envelope_case(seed);
-        assert!(case.factors.defects.is_empty(), "{seed}: a good part");
         let c = r.compare(&case.factors, &ins);
         assert!(c.verdict_ok, "{seed}: verdict {:?}", ins.verdict);
         assert!(
@@ -56,16 +57,10 @@ fn a_housing_under_a_dim_band_or_corner_of_backlight_is_found_and_its_pins_read(
             "{seed}: pins read wrong: {:?}",
             c.status_mismatches
         );
-        assert_eq!(c.extras_spurious, 0, "{seed}: spurious extras");
+        if case.factors.defects.is_empty() {
+            // (945 355 keeps, as before, a spurious "bar" of 410 tips: without
+            // the scale no width limit applies.)
+            assert_eq!(c.extras_spurious, 0, "{seed}: spurious extras");
+        }
     }
-    // A failed part (one pin missing): the grid must stand on its pins,
-    // not a pitch off along the housing.
-    let (case, r, ins) = common::envelope_case(945_355);
-    let c = r.compare(&case.factors, &ins);
-    assert!(c.verdict_ok, "945355: verdict {:?}", ins.verdict);
-    assert!(
-        c.status_mismatches.is_empty(),
-        "945355: pins read wrong: {:?}",
-        c.status_mismatches
-    );
 }
