@@ -226,14 +226,12 @@ pub const QUANTUM_FLOOR_STEPS: f32 = 2.0;
 /// The noise floor's multiple of σ for [`Smoothing::FaintLowFloor`].
 pub const LOW_FLOOR_SIGMAS: f32 = 4.0;
 
-/// [`search_coarse_expecting`] with the smoothing box of `smoothing`.
-pub fn search_coarse_smoothed(
-    coarse: &Coarse,
-    pin_px: f64,
-    mask: Option<&dyn Fn(usize, usize) -> bool>,
-    expected_tips: Option<usize>,
-    smoothing: Smoothing,
-) -> Found {
+/// The coarse search's top-hat for tips `pin_px` wide (full px) and its
+/// background: the coarse image smoothed by the box of `smoothing`, less
+/// its opening-like background ([`morph::background_square`]), clipped at
+/// zero. Shared by the search and the scale's periodicity pass
+/// ([`super::scale_period`]).
+pub fn tophat(coarse: &Coarse, pin_px: f64, smoothing: Smoothing) -> (Vec<f32>, Vec<f32>) {
     let k = coarse.k;
     let pin_c = pin_px / k as f64;
     let r = (1.1 * pin_c).ceil() as usize + 1;
@@ -261,6 +259,19 @@ pub fn search_coarse_smoothed(
         .zip(&background)
         .map(|(a, b)| (a - b).max(0.0))
         .collect();
+    (tophat, background)
+}
+
+/// [`search_coarse_expecting`] with the smoothing box of `smoothing`.
+pub fn search_coarse_smoothed(
+    coarse: &Coarse,
+    pin_px: f64,
+    mask: Option<&dyn Fn(usize, usize) -> bool>,
+    expected_tips: Option<usize>,
+    smoothing: Smoothing,
+) -> Found {
+    let pin_c = pin_px / coarse.k as f64;
+    let (tophat, background) = tophat(coarse, pin_px, smoothing);
     let (w, h) = (coarse.w, coarse.h);
     let tip_area_c = pin_c * pin_c;
     let inside = |x: usize, y: usize| mask.is_none_or(|m| m(x, y));

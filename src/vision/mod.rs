@@ -54,6 +54,7 @@ pub mod result;
 pub mod scale;
 mod scale_blobs;
 mod scale_one_tip;
+mod scale_period;
 pub mod side;
 mod side_bar;
 mod side_edge;

@@ -64,7 +64,7 @@ pub(crate) fn inspect_top_with<P: Px>(
     let sign = recipe.polarity.sign();
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
-    let (pin_px0, _estimate) = match recipe.mm_per_px {
+    let (pin_px0, estimate) = match recipe.mm_per_px {
         Some(m) => (recipe.pin_mm / m, None),
         None => {
             let e = super::scale::estimate(plane, sign, recipe, full_scale)?;
@@ -142,11 +142,12 @@ pub(crate) fn inspect_top_with<P: Px>(
         .filter(|c| c.pinlike)
         .map(|c| (c.m.x, c.m.y))
         .collect();
+    let too_faint = super::scale_period::too_faint(estimate.as_ref());
     if pin_pts.is_empty() {
         return Err(VisionError::NoPins {
             part,
             msg: format!(
-                "no tip-sized {} blob found (expected tips about {:.0} px wide; wrong recipe, view or polarity?)",
+                "no tip-sized {} blob found (expected tips about {:.0} px wide; wrong recipe, view or polarity?){too_faint}",
                 if sign > 0.0 { "bright" } else { "dark" },
                 pin_px0
             ),
@@ -307,7 +308,7 @@ pub(crate) fn inspect_top_with<P: Px>(
     if fixed.is_none() && model.len() < 2 && one_area.is_none() {
         return Err(VisionError::NoPins {
             part,
-            msg: "cannot estimate mm_per_px from fewer than two pins".into(),
+            msg: format!("cannot estimate mm_per_px from fewer than two pins{too_faint}"),
         });
     }
     // Two or three pins do not over-determine a similarity: its rotation,
