@@ -32,6 +32,11 @@ use super::scale::{ScaleEstimate, W_MIN};
 /// (`tests::noise_alone_shows_no_period`).
 const MIN_Z: f64 = 5.0;
 
+/// The steepest row looked along, degrees: the envelope's rotation and a
+/// degree more (each offset across is a correlation over the frame; the
+/// grid's 12° would double the work for parts outside the envelope).
+const TILT: f64 = super::envelope::ROTATION_DEG + 1.0;
+
 /// The pitch along a row (or down the column of a one-column part) from
 /// the periodicity of the top-hat, with the tip width it implies; `None`
 /// when no width on the ladder shows a lattice.
@@ -162,14 +167,14 @@ fn centred_tophat(coarse: &Coarse, w: f64) -> Vec<f32> {
 
 /// Per line across the row, the sums of `t` (w × h) times itself shifted
 /// by `d` along the row (x when `along_x`) and `e` across it, for each
-/// `e` within the grid's tilt; each line holds `len_along − d` products.
+/// `e` within [`TILT`]; each line holds `len_along − d` products.
 /// `None` when the shift leaves less than a third of the row.
 fn line_sums(t: &[f32], w: usize, h: usize, d: usize, along_x: bool) -> Option<Vec<Vec<f64>>> {
     let (len_along, len_across) = if along_x { (w, h) } else { (h, w) };
     if d == 0 || 3 * d >= 2 * len_along {
         return None;
     }
-    let tilt = super::grid::MAX_TILT_DEG.to_radians().tan();
+    let tilt = TILT.to_radians().tan();
     let reach = (tilt * d as f64).ceil() as isize;
     let out = (-reach..=reach)
         .filter(|e| e.unsigned_abs() < len_across)
@@ -337,7 +342,7 @@ fn refine(
     lines: std::ops::Range<usize>,
 ) -> Option<f64> {
     let len_along = if along_x { size.0 } else { size.1 };
-    let tilt = super::grid::MAX_TILT_DEG.to_radians().tan();
+    let tilt = TILT.to_radians().tan();
     let reach = (tilt * 1.25 * p).ceil() as isize;
     let lags = ((0.8 * p).floor() as usize, (1.25 * p).ceil() as usize);
     let (p1, e1) = peak_lag(t, size, along_x, lags, -reach..=reach, lines.clone())?;
