@@ -257,6 +257,30 @@ impl Coarse {
     }
 }
 
+/// The coarse images of one plane, by factor (1–8), each built on first
+/// use: the scale's ladders try several tip widths at each factor.
+pub struct CoarseCache<'a, P> {
+    plane: &'a Plane<'a, P>,
+    sign: f32,
+    built: Vec<Option<Coarse>>,
+}
+
+impl<'a, P: Px> CoarseCache<'a, P> {
+    pub fn new(plane: &'a Plane<'a, P>, sign: f32) -> Self {
+        CoarseCache {
+            plane,
+            sign,
+            built: vec![None; 9],
+        }
+    }
+
+    /// The coarse image at factor `k` (clamped to 1–8).
+    pub fn get(&mut self, k: usize) -> &Coarse {
+        let (plane, sign, k) = (self.plane, self.sign, k.clamp(1, 8));
+        self.built[k].get_or_insert_with(|| Coarse::build(plane, k, sign))
+    }
+}
+
 /// Bilinear sample of a w×h grid read through `at` at a sub-pixel
 /// position, clamped to the grid (the one interpolation of full planes
 /// and coarse pyramids).

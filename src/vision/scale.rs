@@ -589,4 +589,4 @@ fn estimate_smoothed<P: Px>(
 
 #[cfg(test)]
 #[path = "scale_tests.rs"]
-mod tests;
+pub(super) mod tests;

@@ -20,7 +20,7 @@
 //! it was found at implies; its measured area then gives the width.
 
 use super::detect::{self, Smoothing};
-use super::gray::{Coarse, Plane, Px};
+use super::gray::{CoarseCache, Plane, Px};
 use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
 use super::scale::{TipBlob, W_MIN, area_of_width, tip_blobs, width_of_area};
@@ -34,16 +34,12 @@ const MAX_TRIED: usize = 4;
 pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> Option<f64> {
     let (wd, ht) = (plane.w as f64, plane.h as f64);
     let w_max = (wd.min(ht) / 3.0).max(W_MIN);
-    let mut cache: Vec<Option<Coarse>> = vec![None; 9];
+    let mut cache = CoarseCache::new(plane, sign);
     // (width tried, blob), the strongest blob at each width.
     let mut best: Vec<(f64, TipBlob)> = Vec::new();
     let mut w = w_max;
     while w >= W_MIN {
-        let k = detect::coarse_factor(w);
-        if cache[k].is_none() {
-            cache[k] = Some(Coarse::build(plane, k, sign));
-        }
-        let coarse = cache[k].as_ref()?;
+        let coarse = cache.get(detect::coarse_factor(w));
         if let Some(b) = tip_blobs(recipe, coarse, w, Smoothing::Normal)
             .into_iter()
             .max_by(|a, b| a.3.total_cmp(&b.3))

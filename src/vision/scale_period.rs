@@ -22,7 +22,7 @@
 //! are read the same.
 
 use super::detect::{self, Smoothing};
-use super::gray::{Coarse, Plane, Px};
+use super::gray::{Coarse, CoarseCache, Plane, Px};
 use super::recipe::Recipe;
 use super::scale::{ScaleEstimate, W_MIN};
 
@@ -59,15 +59,12 @@ pub(super) fn estimate<P: Px>(
     let (wd, ht) = (plane.w as f64, plane.h as f64);
     // The row fits in the frame (with its end tips whole).
     let w_max = ((wd.max(ht)) / (n_along * ratio)).min(wd.min(ht) / 3.0);
-    let mut cache: Vec<Option<Coarse>> = vec![None; 9];
+    let mut cache = CoarseCache::new(plane, sign);
     let mut best: Option<(f64, f64, usize, usize)> = None; // (z, w, k, band)
     let mut w = w_max;
     while w >= W_MIN {
         let k = detect::coarse_factor(w);
-        if cache[k].is_none() {
-            cache[k] = Some(Coarse::build(plane, k, sign));
-        }
-        let coarse = cache[k].as_ref()?;
+        let coarse = cache.get(k);
         let t = centred_tophat(coarse, w);
         let p = w * ratio / k as f64;
         let band = band_lines(recipe, w / k as f64, p, along_x);
@@ -91,7 +88,7 @@ pub(super) fn estimate<P: Px>(
     if s < MIN_Z {
         return None;
     }
-    let coarse = cache[k].as_ref()?;
+    let coarse = cache.get(k);
     let t = centred_tophat(coarse, w);
     let p = w * ratio / k as f64;
     let lines = b..b + band_lines(recipe, w / k as f64, p, along_x);
@@ -419,19 +416,14 @@ mod tests {
     }
 
     fn scene_plane(r: &Recipe, contrast: f64, seed: u64) -> (Vec<u8>, usize, usize) {
-        use super::super::gray::GrayData;
-        use super::super::synth::Scene;
-        let mut scene = Scene::nominal(r, MM_PER_PX);
-        scene.contrast = contrast;
-        scene.noise_dn = 14.0;
-        scene.blur_px = 2.4;
-        scene.seed = seed;
-        scene.rotation_deg = -2.8;
-        let (g, _) = scene.render();
-        let GrayData::U8(d) = g.data else {
-            panic!("8-bit scene");
-        };
-        (d, g.width as usize, g.height as usize)
+        let (d, w, h, _) = super::super::scale::tests::faint_scene(
+            r,
+            MM_PER_PX,
+            (contrast, 14.0, 2.4),
+            seed,
+            -2.8,
+        );
+        (d, w, h)
     }
 
     const MM_PER_PX: f64 = 0.044;

@@ -147,6 +147,30 @@ fn every_other_tip_is_not_the_lattice() {
     assert!((e.pin_px / 12.5 - 1.0).abs() < 0.05, "{e:?}");
 }
 
+/// An 8-bit synthetic scene of the recipe at `mm_per_px`, with (contrast,
+/// noise σ in DN, blur σ in px) `look`, its noise seed and a rotation:
+/// the samples, width, height and full scale.
+pub(in crate::vision) fn faint_scene(
+    r: &Recipe,
+    mm_per_px: f64,
+    look: (f64, f64, f64),
+    seed: u64,
+    rotation_deg: f64,
+) -> (Vec<u8>, usize, usize, f32) {
+    use super::super::gray::GrayData;
+    use super::super::synth::Scene;
+    let mut scene = Scene::nominal(r, mm_per_px);
+    (scene.contrast, scene.noise_dn, scene.blur_px) = look;
+    scene.seed = seed;
+    scene.rotation_deg = rotation_deg;
+    let (g, _) = scene.render();
+    let fs = g.full_scale();
+    let GrayData::U8(d) = g.data else {
+        panic!("8-bit scene");
+    };
+    (d, g.width as usize, g.height as usize, fs)
+}
+
 /// The scale estimate on a faint scene: `contrast`, `noise_dn`, blur
 /// `blur_px`, with the coarse search's smoothing `smoothing` only.
 fn estimate_faint(
@@ -158,20 +182,7 @@ fn estimate_faint(
     seed: u64,
     smoothing: Option<Smoothing>,
 ) -> Result<ScaleEstimate, VisionError> {
-    use super::super::gray::GrayData;
-    use super::super::synth::Scene;
-    let mut scene = Scene::nominal(r, mm_per_px);
-    scene.contrast = contrast;
-    scene.noise_dn = noise_dn;
-    scene.blur_px = blur_px;
-    scene.seed = seed;
-    scene.rotation_deg = 2.0;
-    let (g, _) = scene.render();
-    let (w, h) = (g.width as usize, g.height as usize);
-    let fs = g.full_scale();
-    let GrayData::U8(d) = &g.data else {
-        panic!("8-bit scene");
-    };
+    let (d, w, h, fs) = faint_scene(r, mm_per_px, (contrast, noise_dn, blur_px), seed, 2.0);
     let plane = Plane {
         w,
         h,
@@ -229,8 +240,6 @@ fn small_faint_tips_are_found_by_the_second_pass() {
 /// fails on those, so they were errors before the periodicity.
 #[test]
 fn tips_too_faint_for_the_blob_passes_give_the_scale_by_their_period() {
-    use super::super::gray::GrayData;
-    use super::super::synth::Scene;
     let truth = 1.0 / 0.044;
     let (mut unheld, mut rescued) = (0, 0);
     for (rows, cols) in [(1u32, 14u32), (2, 18)] {
@@ -243,18 +252,7 @@ fn tips_too_faint_for_the_blob_passes_give_the_scale_by_their_period() {
         .unwrap();
         for c in [0.12, 0.15, 0.18, 0.22] {
             for seed in 1..=2 {
-                let mut scene = Scene::nominal(&r, 0.044);
-                scene.contrast = c;
-                scene.noise_dn = 14.0;
-                scene.blur_px = 2.4;
-                scene.seed = seed;
-                scene.rotation_deg = -2.8;
-                let (g, _) = scene.render();
-                let (w, h) = (g.width as usize, g.height as usize);
-                let fs = g.full_scale();
-                let GrayData::U8(d) = &g.data else {
-                    panic!("8-bit scene");
-                };
+                let (d, w, h, fs) = faint_scene(&r, 0.044, (c, 14.0, 2.4), seed, -2.8);
                 let plane = Plane {
                     w,
                     h,
