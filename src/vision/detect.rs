@@ -226,6 +226,15 @@ pub const QUANTUM_FLOOR_STEPS: f32 = 2.0;
 /// The noise floor's multiple of σ for [`Smoothing::FaintLowFloor`].
 pub const LOW_FLOOR_SIGMAS: f32 = 4.0;
 
+/// The half-width (coarse px) of the smoothing box of `smoothing` for
+/// tips `pin_c` coarse px wide: the box is `2m + 1` across.
+pub fn smoothing_half_width(pin_c: f64, smoothing: Smoothing) -> usize {
+    match smoothing {
+        Smoothing::Normal | Smoothing::HoleReach => (pin_c / 4.0).floor() as usize,
+        Smoothing::Faint | Smoothing::FaintLowFloor => (pin_c / 2.5).round() as usize,
+    }
+}
+
 /// The coarse search's top-hat for tips `pin_px` wide (full px) and its
 /// background: the coarse image smoothed by the box of `smoothing`, less
 /// its opening-like background ([`morph::background_square`]), clipped at
@@ -238,10 +247,7 @@ pub fn tophat(coarse: &Coarse, pin_px: f64, smoothing: Smoothing) -> (Vec<f32>, 
     // Smoothing over about half a tip (a matched filter's better half):
     // noise falls by the box's width, a tip's (or a quarter-tip debris')
     // peak does not.
-    let m = match smoothing {
-        Smoothing::Normal | Smoothing::HoleReach => (pin_c / 4.0).floor() as usize,
-        Smoothing::Faint | Smoothing::FaintLowFloor => (pin_c / 2.5).round() as usize,
-    };
+    let m = smoothing_half_width(pin_c, smoothing);
     let smooth = if m >= 1 {
         std::borrow::Cow::Owned(morph::box_mean(&coarse.data, coarse.w, coarse.h, m))
     } else {

@@ -28,7 +28,7 @@ use super::scale::{ScaleEstimate, W_MIN};
 
 /// Least periodicity statistic, in standard deviations of its value on
 /// noise alone ([`z_at`]), for a pitch to count: on noise alone, the best
-/// band of every width of the ladder stays below 2.4
+/// band of every width of the ladder stays below 2.5
 /// (`tests::noise_alone_shows_no_period`).
 const MIN_Z: f64 = 5.0;
 
@@ -60,7 +60,8 @@ pub(super) fn estimate<P: Px>(
     // The row fits in the frame (with its end tips whole).
     let w_max = ((wd.max(ht)) / (n_along * ratio)).min(wd.min(ht) / 3.0);
     let mut cache = CoarseCache::new(plane, sign);
-    let mut best: Option<(f64, f64, usize, usize)> = None; // (z, w, k, band)
+    // (z, w, k, band, top-hat) of the best width so far.
+    let mut best: Option<(f64, f64, usize, usize, Vec<f32>)> = None;
     let mut w = w_max;
     while w >= W_MIN {
         let k = detect::coarse_factor(w);
@@ -78,18 +79,17 @@ pub(super) fn estimate<P: Px>(
             smoothing_box(w, k),
         );
         if let Some((s, b)) = s
-            && best.is_none_or(|c| s > c.0)
+            && best.as_ref().is_none_or(|c| s > c.0)
         {
-            best = Some((s, w, k, b));
+            best = Some((s, w, k, b, t));
         }
         w /= 1.2;
     }
-    let (s, w, k, b) = best?;
+    let (s, w, k, b, t) = best?;
     if s < MIN_Z {
         return None;
     }
     let coarse = cache.get(k);
-    let t = centred_tophat(coarse, w);
     let p = w * ratio / k as f64;
     let lines = b..b + band_lines(recipe, w / k as f64, p, along_x);
     let n_along_u = if along_x { recipe.cols } else { recipe.rows };
@@ -123,9 +123,9 @@ pub(super) fn too_faint(estimate: Option<&ScaleEstimate>) -> String {
 }
 
 /// The top-hat's smoothing box for tips `w` px wide at coarse factor `k`
-/// ([`Smoothing::Faint`]: `2m + 1` coarse px, `m` = tip / 2.5).
+/// ([`Smoothing::Faint`]'s, `2m + 1` coarse px across).
 fn smoothing_box(w: f64, k: usize) -> f64 {
-    2.0 * (w / k as f64 / 2.5).round() + 1.0
+    (2 * detect::smoothing_half_width(w / k as f64, Smoothing::Faint) + 1) as f64
 }
 
 /// How many lines across the row a band holding the part's tips spans
@@ -365,18 +365,12 @@ mod tests {
     use super::*;
 
     /// Gaussian noise alone (σ 15 DN, 8-bit) at three frame sizes: the
-    /// statistic in [`z_per_unit`]'s units over the whole ladder of widths
+    /// statistic in [`z_at`]'s units over the whole ladder of widths
     /// stays within ±4, so the 5 of [`MIN_Z`] is never reached, and
     /// [`estimate`] finds no pitch.
     #[test]
     fn noise_alone_shows_no_period() {
-        let mut st = 12345u64;
-        let mut rnd = || {
-            st = st
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((st >> 33) as f64) / (1u64 << 31) as f64
-        };
+        let mut rng = super::super::synth::Rng::new(12345);
         let recipe = Recipe::from_toml_str(
             "part_number = \"T\"\nview = \"top\"\nrows = 1\ncols = 8\npitch_mm = [1.0, 1.0]\npin_mm = 0.3\npin_shape = \"round\"\npolarity = \"bright\"\n[tolerance]\nposition_mm = 0.1\n",
             "t",
@@ -386,10 +380,7 @@ mod tests {
         for &(w, h) in &[(320usize, 240usize), (640, 480), (1000, 1000)] {
             for _ in 0..3 {
                 let data: Vec<u8> = (0..w * h)
-                    .map(|_| {
-                        let g: f64 = (0..12).map(|_| rnd()).sum::<f64>() - 6.0;
-                        (128.0 + 15.0 * g).clamp(0.0, 255.0) as u8
-                    })
+                    .map(|_| (128.0 + 15.0 * rng.normal()).clamp(0.0, 255.0) as u8)
                     .collect();
                 let plane = Plane { w, h, data: &data };
                 assert_eq!(estimate(&plane, 1.0, &recipe), None);
