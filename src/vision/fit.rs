@@ -401,6 +401,43 @@ pub fn consensus_similarity(
     })
 }
 
+/// The points within `tau_px` of `seed`, a pose from another ruler (the
+/// housing's outline), and the similarity least squares fits to them
+/// ([`refit_on_consensus`]): still a fit to the pins, but one whose
+/// consensus the other ruler chose. With four to eight pins and one or two
+/// bent, the pins alone may explain the bend by a turned or shifted grid
+/// as well as by a bent pin (`consensus_similarity` keeps the pins' own
+/// fit unless its choice is clear); the housing does not turn with them.
+/// `None` unless at least two points, and at least half of them, stay
+/// within `tau_px` of the refitted pose (the seed is a second ruler, so
+/// two bent pins of four need not outvote the two good ones).
+pub fn consensus_from_seed(
+    model: &[(f64, f64)],
+    image: &[(f64, f64)],
+    fixed_scale: Option<f64>,
+    seed: Similarity,
+    tau_px: f64,
+) -> Option<RobustFit> {
+    let n = model.len();
+    if n < 2 || image.len() != n || !(tau_px > 0.0) {
+        return None;
+    }
+    let sim = refit_on_consensus(model, image, fixed_scale, seed, tau_px);
+    let r = residuals(model, image, &sim);
+    let inlier: Vec<bool> = r.iter().map(|&ri| ri < tau_px).collect();
+    let kept = inlier.iter().filter(|b| **b).count();
+    if kept < 2 || 2 * kept < n {
+        return None;
+    }
+    let mut rr = r.clone();
+    Some(RobustFit {
+        sim,
+        rms_px: inlier_rms(&r, &inlier),
+        inlier,
+        sigma_px: 1.4826 * median(&mut rr),
+    })
+}
+
 /// A line y = a + b x.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Line {
@@ -695,6 +732,62 @@ mod tests {
         let good: Vec<_> = m.iter().map(|q| truth.apply(q.0, q.1)).collect();
         let f = consensus_similarity(&m, &good, Some(truth.s), None, 0.1, 4.35).unwrap();
         assert!((f.sim.tx - truth.tx).abs() < 1e-9 && (f.sim.theta - truth.theta).abs() < 1e-12);
+    }
+
+    /// A 1 × 6 row of known scale (Rust envelope 955 848, offsets in part
+    /// axes, px): the end pin bent 1.24 tolerances, the one beside it 0.85
+    /// off the other way. Leaving the end pin out is not a clear choice for the pins
+    /// alone (it would stand only just over a tolerance off), so their fit
+    /// turns towards it and the pin beside it reads bent. Seeded by the
+    /// housing's pose (here the truth, 0.05 px off), the consensus is the
+    /// five good pins, and the bent one shows its bend.
+    #[test]
+    fn a_seed_from_the_housing_chooses_the_consensus() {
+        let truth = Similarity {
+            s: 32.2,
+            theta: -0.004,
+            tx: 366.3,
+            ty: 230.0,
+        };
+        let tol = 0.102 * truth.s;
+        let m: Vec<(f64, f64)> = (0..6).map(|c| ((c as f64 - 2.5) * 2.54, 0.0)).collect();
+        let off = [
+            (-0.07, 0.1),
+            (-0.05, 0.02),
+            (0.0, -0.01),
+            (-0.14, 0.0),
+            (2.45, -1.33),
+            (1.82, 3.63),
+        ];
+        let (sn, cs) = truth.theta.sin_cos();
+        let p: Vec<_> = m
+            .iter()
+            .zip(off)
+            .map(|(q, (du, dv))| {
+                let c = truth.apply(q.0, q.1);
+                (c.0 + cs * du - sn * dv, c.1 + sn * du + cs * dv)
+            })
+            .collect();
+        let resid = |sim: &Similarity, i: usize| {
+            let q = sim.apply(m[i].0, m[i].1);
+            (q.0 - p[i].0).hypot(q.1 - p[i].1)
+        };
+        let pins = consensus_similarity(&m, &p, Some(truth.s), None, 0.1, tol).unwrap();
+        assert!(resid(&pins.sim, 5) < tol, "the pins' own fit masks it");
+        let seed = Similarity {
+            tx: truth.tx + 0.05,
+            ..truth
+        };
+        let f = consensus_from_seed(&m, &p, Some(truth.s), seed, tol).unwrap();
+        assert_eq!(f.inlier, vec![true, true, true, true, true, false]);
+        assert!(resid(&f.sim, 5) > 1.05 * tol, "{}", resid(&f.sim, 5) / tol);
+        assert!(resid(&f.sim, 4) < tol, "{}", resid(&f.sim, 4) / tol);
+        // A seed no two pins agree with is no answer.
+        let far = Similarity {
+            ty: truth.ty + 3.0 * tol,
+            ..truth
+        };
+        assert!(consensus_from_seed(&m, &p, Some(truth.s), far, tol).is_none());
     }
 
     #[test]

@@ -340,24 +340,50 @@ pub(crate) fn inspect_top_with<P: Px>(
     } else {
         px_mm
     };
+    // The housing's outline as the grid's frame (its rotation and centre,
+    // the fit's scale), where it is measured cleanly and is the part's:
+    // turned and shifted no more than a bend could move the pins' fit.
+    let outline = |sim: &Similarity| {
+        let (_, rect) = housing_rect(sim)?;
+        let pose: HousingPose = measure_pose(plane, sim, rect, (u_half, v_half))?;
+        let (cu, cv) = pose.centre_mm;
+        (pose.dtheta.abs() <= MAX_HOUSING_TURN && cu.hypot(cv) <= 0.3 * pin_pitch_min)
+            .then(|| pose.frame(sim))
+    };
     let housing_frame = |sim: &Similarity, model: &[(f64, f64)], image: &[(f64, f64)]| {
         if !(2..=FEW_PINS).contains(&model.len()) {
             return None;
         }
-        let (_, rect) = housing_rect(sim)?;
-        let pose: HousingPose = measure_pose(plane, sim, rect, (u_half, v_half))?;
-        let (cu, cv) = pose.centre_mm;
-        // The outline must be the part's: turned and shifted no more than
-        // a bend could move the pins' fit, and every pin near its place.
-        if pose.dtheta.abs() > MAX_HOUSING_TURN || cu.hypot(cv) > 0.3 * pin_pitch_min {
-            return None;
-        }
-        let h = pose.frame(sim);
+        let h = outline(sim)?;
+        // Every pin near its place.
         let far = model.iter().zip(image).any(|(m, p)| {
             let q = h.apply(m.0, m.1);
             (q.0 - p.0).hypot(q.1 - p.1) > 0.35 * pin_pitch_min * h.s
         });
         (!far).then_some(h)
+    };
+    // From four pins on the pins place the grid, but with a few of them and
+    // one or two bent, which are bent is a choice the pins alone may make
+    // badly: their fit turns towards a bent end pin and a good one beside
+    // it reads bent (Rust 925 154, 945 284, 955 848). Where the outline is
+    // measured, it chooses the consensus the grid is fitted to
+    // (`fit::consensus_from_seed`); `None` where it chooses the pins the
+    // fit already keeps.
+    let tau_px = |sim: &Similarity| recipe.tolerance.position_mm * sim.s;
+    let outline_consensus = |sim: &Similarity, model: &[(f64, f64)], image: &[(f64, f64)]| {
+        if !(FEW_PINS + 1..=fit::CONSENSUS_MAX_POINTS).contains(&model.len()) {
+            return None;
+        }
+        let f = fit::consensus_from_seed(model, image, fixed, outline(sim)?, tau_px(sim))?;
+        let kept: Vec<bool> = model
+            .iter()
+            .zip(image)
+            .map(|(m, p)| {
+                let q = sim.apply(m.0, m.1);
+                (q.0 - p.0).hypot(q.1 - p.1) < tau_px(sim)
+            })
+            .collect();
+        (f.inlier != kept).then_some(f)
     };
     let by_housing = housing_frame(&sim, &model, &image);
     if let Some(h) = by_housing {
@@ -366,6 +392,21 @@ pub(crate) fn inspect_top_with<P: Px>(
             "{} pins do not over-determine the grid: its rotation and centre taken from the housing's outline",
             model.len()
         ));
+    }
+    let chosen_by_outline = |f: &fit::RobustFit| {
+        format!(
+            "the housing's outline chose the pins the grid is fitted to: {} of {}",
+            f.inlier.iter().filter(|b| **b).count(),
+            f.inlier.len()
+        )
+    };
+    let mut by_outline = false;
+    if by_housing.is_none()
+        && let Some(f) = outline_consensus(&sim, &model, &image)
+    {
+        warnings.push(chosen_by_outline(&f));
+        (sim, inliers, rms) = (f.sim, f.inlier.iter().filter(|b| **b).count(), f.rms_px);
+        by_outline = true;
     }
     // Most pins off the recipe's grid: the robust fit's scale grows with
     // them and its RMS becomes a sizeable part of the pitch (real parts on
@@ -486,9 +527,19 @@ pub(crate) fn inspect_top_with<P: Px>(
         let tau = recipe.tolerance.position_mm * sim.s;
         if let Some(f) = fit::consensus_similarity(&model, &image, fixed, Some(sim), 0.1, tau) {
             // The housing read once stays the datum if it is not read again.
-            sim = housing_frame(&f.sim, &model, &image)
-                .or(by_housing)
-                .unwrap_or(f.sim);
+            let f = match housing_frame(&f.sim, &model, &image).or(by_housing) {
+                Some(h) => fit::RobustFit { sim: h, ..f },
+                None => match outline_consensus(&f.sim, &model, &image) {
+                    Some(o) => {
+                        if !by_outline {
+                            warnings.push(chosen_by_outline(&o));
+                        }
+                        o
+                    }
+                    None => f,
+                },
+            };
+            sim = f.sim;
             inliers = f.inlier.iter().filter(|b| **b).count();
             rms = f.rms_px;
             for (pi, &(r, c)) in positions.iter().enumerate() {
