@@ -71,6 +71,7 @@ mod top_faint;
 mod top_first_fit;
 mod top_fixture;
 mod top_noisy;
+mod top_outline;
 mod top_ridge;
 mod top_shoulder;
 mod top_window;

@@ -13,7 +13,7 @@ use super::error::VisionError;
 use super::fit::{self, Similarity};
 use super::gray::{Coarse, ImageInfo, Plane, Px};
 use super::grid::{self, LatticeError};
-use super::housing::{HousingPose, find_housing, measure_pose};
+use super::housing::find_housing;
 use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
@@ -28,16 +28,7 @@ use super::top_candidates::{
     measure_candidates, use_blobs_at,
 };
 use super::top_first_fit::FitPoints;
-
-/// Up to this many pins the similarity fit cannot tell one pin's bend from
-/// the grid's pose (four parameters, or three with mm_per_px known): the
-/// housing's outline then places the grid ([`measure_pose`]).
-const FEW_PINS: usize = 3;
-
-/// The most the housing's outline may be turned against the pins' fit
-/// and still be the part's: one pin of two bent across their line by 0.3
-/// pitch (the most the assignment accepts) turns their fit by ≈ 0.3 rad.
-const MAX_HOUSING_TURN: f64 = 0.3;
+use super::top_outline::{FEW_PINS, Outline, chosen_note};
 
 /// Inspects one top-view image.
 pub fn inspect_top<P: Px>(
@@ -311,79 +302,26 @@ pub(crate) fn inspect_top_with<P: Px>(
             msg: format!("cannot estimate mm_per_px from fewer than two pins{too_faint}"),
         });
     }
-    // Two or three pins do not over-determine a similarity: its rotation,
-    // centre (and free scale) follow one pin's bend, which then shows as a
-    // share or not at all. The housing's outline is a second ruler the
-    // pins do not move: when it is measured cleanly, the grid's rotation
-    // and centre are taken from it (the scale from the recipe's mm_per_px
-    // or the pins) and every pin shows its own deviation.
     let (u_half, v_half) = (
         (recipe.cols as f64 - 1.0) / 2.0 * px_mm,
         (recipe.rows as f64 - 1.0) / 2.0 * py_mm,
     );
-    let housing_rect = |sim: &Similarity| {
-        housing_lat.map(|h| {
-            let corners_lat = [(h[0], h[2]), (h[1], h[2]), (h[1], h[3]), (h[0], h[3])];
-            let corners_px = corners_lat.map(|(a, b)| lat.to_image(a, b));
-            let uv: Vec<(f64, f64)> = corners_px.iter().map(|p| sim.inverse(p.0, p.1)).collect();
-            let extent_mm = [
-                0.5 * (uv[0].0 + uv[3].0),
-                0.5 * (uv[1].0 + uv[2].0),
-                0.5 * (uv[0].1 + uv[1].1),
-                0.5 * (uv[2].1 + uv[3].1),
-            ];
-            (corners_px, extent_mm)
-        })
+    let outline = Outline {
+        plane,
+        lat: &lat,
+        housing_lat,
+        half_mm: (u_half, v_half),
+        pin_pitch_min: if recipe.rows > 1 {
+            px_mm.min(py_mm)
+        } else {
+            px_mm
+        },
+        position_mm: recipe.tolerance.position_mm,
+        fixed,
     };
-    let pin_pitch_min = if recipe.rows > 1 {
-        px_mm.min(py_mm)
-    } else {
-        px_mm
-    };
-    // The housing's outline as the grid's frame (its rotation and centre,
-    // the fit's scale), where it is measured cleanly and is the part's:
-    // turned and shifted no more than a bend could move the pins' fit.
-    let outline = |sim: &Similarity| {
-        let (_, rect) = housing_rect(sim)?;
-        let pose: HousingPose = measure_pose(plane, sim, rect, (u_half, v_half))?;
-        let (cu, cv) = pose.centre_mm;
-        (pose.dtheta.abs() <= MAX_HOUSING_TURN && cu.hypot(cv) <= 0.3 * pin_pitch_min)
-            .then(|| pose.frame(sim))
-    };
+    let housing_rect = |sim: &Similarity| outline.rect(sim);
     let housing_frame = |sim: &Similarity, model: &[(f64, f64)], image: &[(f64, f64)]| {
-        if !(2..=FEW_PINS).contains(&model.len()) {
-            return None;
-        }
-        let h = outline(sim)?;
-        // Every pin near its place.
-        let far = model.iter().zip(image).any(|(m, p)| {
-            let q = h.apply(m.0, m.1);
-            (q.0 - p.0).hypot(q.1 - p.1) > 0.35 * pin_pitch_min * h.s
-        });
-        (!far).then_some(h)
-    };
-    // From four pins on the pins place the grid, but with a few of them and
-    // one or two bent, which are bent is a choice the pins alone may make
-    // badly: their fit turns towards a bent end pin and a good one beside
-    // it reads bent (Rust 925 154, 945 284, 955 848). Where the outline is
-    // measured, it chooses the consensus the grid is fitted to
-    // (`fit::consensus_from_seed`); `None` where it chooses the pins the
-    // fit already keeps.
-    let tau_px = |sim: &Similarity| recipe.tolerance.position_mm * sim.s;
-    let outline_consensus = |sim: &Similarity, model: &[(f64, f64)], image: &[(f64, f64)]| {
-        if !(FEW_PINS + 1..=fit::CONSENSUS_MAX_POINTS).contains(&model.len()) {
-            return None;
-        }
-        let f = fit::consensus_from_seed(model, image, fixed, outline(sim)?, tau_px(sim))?;
-        let kept: Vec<bool> = model
-            .iter()
-            .zip(image)
-            .map(|(m, p)| {
-                let q = sim.apply(m.0, m.1);
-                (q.0 - p.0).hypot(q.1 - p.1) < tau_px(sim)
-            })
-            .collect();
-        (f.inlier != kept).then_some(f)
+        outline.for_few_pins(sim, model, image)
     };
     let by_housing = housing_frame(&sim, &model, &image);
     if let Some(h) = by_housing {
@@ -393,18 +331,11 @@ pub(crate) fn inspect_top_with<P: Px>(
             model.len()
         ));
     }
-    let chosen_by_outline = |f: &fit::RobustFit| {
-        format!(
-            "the housing's outline chose the pins the grid is fitted to: {} of {}",
-            f.inlier.iter().filter(|b| **b).count(),
-            f.inlier.len()
-        )
-    };
     let mut by_outline = false;
     if by_housing.is_none()
-        && let Some(f) = outline_consensus(&sim, &model, &image)
+        && let Some(f) = outline.consensus(&sim, &model, &image)
     {
-        warnings.push(chosen_by_outline(&f));
+        warnings.push(chosen_note(&f));
         (sim, inliers, rms) = (f.sim, f.inlier.iter().filter(|b| **b).count(), f.rms_px);
         by_outline = true;
     }
@@ -529,10 +460,10 @@ pub(crate) fn inspect_top_with<P: Px>(
             // The housing read once stays the datum if it is not read again.
             let f = match housing_frame(&f.sim, &model, &image).or(by_housing) {
                 Some(h) => fit::RobustFit { sim: h, ..f },
-                None => match outline_consensus(&f.sim, &model, &image) {
+                None => match outline.consensus(&f.sim, &model, &image) {
                     Some(o) => {
                         if !by_outline {
-                            warnings.push(chosen_by_outline(&o));
+                            warnings.push(chosen_note(&o));
                         }
                         o
                     }

@@ -1,0 +1,129 @@
+//! The housing's outline as a second ruler for the grid, one the pins do
+//! not move. Two or three pins do not over-determine a similarity: its
+//! rotation, centre (and free scale) follow one pin's bend, which then
+//! shows as a share or not at all; where the outline is measured cleanly,
+//! the grid's rotation and centre are taken from it (the scale from the
+//! recipe's `mm_per_px` or the pins) and every pin shows its own
+//! deviation. From four pins on the pins place the grid, but with a few
+//! of them and one or two bent, which are bent is a choice the pins alone
+//! may make badly; the outline then chooses the pins the grid is fitted
+//! to. Kept apart from `top.rs` (the pipeline).
+
+use super::fit::{self, RobustFit, Similarity};
+use super::gray::{Plane, Px};
+use super::grid::Lattice;
+use super::housing::measure_pose;
+
+/// Up to this many pins the similarity fit cannot tell one pin's bend from
+/// the grid's pose (four parameters, or three with mm_per_px known): the
+/// housing's outline then places the grid ([`measure_pose`]).
+pub(super) const FEW_PINS: usize = 3;
+
+/// The most the housing's outline may be turned against the pins' fit
+/// and still be the part's: one pin of two bent across their line by 0.3
+/// pitch (the most the assignment accepts) turns their fit by ≈ 0.3 rad.
+const MAX_HOUSING_TURN: f64 = 0.3;
+
+/// The coarse outline's corners (px) and its extent in a fit's frame
+/// ([u0, u1, v0, v1], mm).
+pub(super) type Rect = ([(f64, f64); 4], [f64; 4]);
+
+/// What the outline is measured from: the coarse outline in lattice units
+/// (`find_housing`) and the part's geometry.
+pub(super) struct Outline<'a, P: Px> {
+    pub plane: &'a Plane<'a, P>,
+    pub lat: &'a Lattice,
+    /// Coarse outline [a0, a1, b0, b1] in lattice units.
+    pub housing_lat: Option<[f64; 4]>,
+    /// Half the pins' field along u and v, mm.
+    pub half_mm: (f64, f64),
+    /// The smallest pitch between neighbouring pins, mm.
+    pub pin_pitch_min: f64,
+    /// The recipe's position tolerance, mm.
+    pub position_mm: f64,
+    /// The recipe's scale (px per mm), when it gives `mm_per_px`.
+    pub fixed: Option<f64>,
+}
+
+impl<P: Px> Outline<'_, P> {
+    /// The coarse outline in the frame of `sim`.
+    pub fn rect(&self, sim: &Similarity) -> Option<Rect> {
+        let h = self.housing_lat?;
+        let corners_lat = [(h[0], h[2]), (h[1], h[2]), (h[1], h[3]), (h[0], h[3])];
+        let corners_px = corners_lat.map(|(a, b)| self.lat.to_image(a, b));
+        let uv: Vec<(f64, f64)> = corners_px.iter().map(|p| sim.inverse(p.0, p.1)).collect();
+        let extent_mm = [
+            0.5 * (uv[0].0 + uv[3].0),
+            0.5 * (uv[1].0 + uv[2].0),
+            0.5 * (uv[0].1 + uv[1].1),
+            0.5 * (uv[2].1 + uv[3].1),
+        ];
+        Some((corners_px, extent_mm))
+    }
+
+    /// The grid on the outline (its rotation and centre, the fit's scale),
+    /// where the outline is measured cleanly and is the part's: turned and
+    /// shifted no more than a bend could move the pins' fit.
+    fn frame(&self, sim: &Similarity) -> Option<Similarity> {
+        let (_, rect) = self.rect(sim)?;
+        let pose = measure_pose(self.plane, sim, rect, self.half_mm)?;
+        let (cu, cv) = pose.centre_mm;
+        (pose.dtheta.abs() <= MAX_HOUSING_TURN && cu.hypot(cv) <= 0.3 * self.pin_pitch_min)
+            .then(|| pose.frame(sim))
+    }
+
+    /// For two or three fit points: the grid on the outline, where every
+    /// pin stands near its place on it.
+    pub fn for_few_pins(
+        &self,
+        sim: &Similarity,
+        model: &[(f64, f64)],
+        image: &[(f64, f64)],
+    ) -> Option<Similarity> {
+        if !(2..=FEW_PINS).contains(&model.len()) {
+            return None;
+        }
+        let h = self.frame(sim)?;
+        let far = model.iter().zip(image).any(|(m, p)| {
+            let q = h.apply(m.0, m.1);
+            (q.0 - p.0).hypot(q.1 - p.1) > 0.35 * self.pin_pitch_min * h.s
+        });
+        (!far).then_some(h)
+    }
+
+    /// For 4–16 fit points: the fit to the pins the outline agrees with
+    /// (`fit::consensus_from_seed`). A bent end pin turns the pins' own fit
+    /// towards it and a good pin beside it reads bent (Rust 925 154,
+    /// 945 284, 955 848). `None` where the outline keeps the pins `sim`
+    /// already keeps, or is not measured.
+    pub fn consensus(
+        &self,
+        sim: &Similarity,
+        model: &[(f64, f64)],
+        image: &[(f64, f64)],
+    ) -> Option<RobustFit> {
+        if !(FEW_PINS + 1..=fit::CONSENSUS_MAX_POINTS).contains(&model.len()) {
+            return None;
+        }
+        let tau = self.position_mm * sim.s;
+        let f = fit::consensus_from_seed(model, image, self.fixed, self.frame(sim)?, tau)?;
+        let kept: Vec<bool> = model
+            .iter()
+            .zip(image)
+            .map(|(m, p)| {
+                let q = sim.apply(m.0, m.1);
+                (q.0 - p.0).hypot(q.1 - p.1) < tau
+            })
+            .collect();
+        (f.inlier != kept).then_some(f)
+    }
+}
+
+/// The note for a fit whose pins the outline chose.
+pub(super) fn chosen_note(f: &RobustFit) -> String {
+    format!(
+        "the housing's outline chose the pins the grid is fitted to: {} of {}",
+        f.inlier.iter().filter(|b| **b).count(),
+        f.inlier.len()
+    )
+}
