@@ -2,6 +2,19 @@
 
 use super::*;
 
+/// Where `truth` puts each model point, moved by its offset in the part's
+/// axes (px).
+fn placed_off(truth: &Similarity, m: &[(f64, f64)], off: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let (sn, cs) = truth.theta.sin_cos();
+    m.iter()
+        .zip(off)
+        .map(|(q, &(du, dv))| {
+            let c = truth.apply(q.0, q.1);
+            (c.0 + cs * du - sn * dv, c.1 + sn * du + cs * dv)
+        })
+        .collect()
+}
+
 fn grid() -> Vec<(f64, f64)> {
     let mut m = Vec::new();
     for r in 0..2 {
@@ -121,15 +134,7 @@ fn a_bent_end_pin_of_seven_is_not_taken_back_into_the_fit() {
         (1.6, -1.92),
         (-15.98, -22.21),
     ];
-    let (sn, cs) = truth.theta.sin_cos();
-    let p: Vec<_> = m
-        .iter()
-        .zip(off)
-        .map(|(q, (du, dv))| {
-            let c = truth.apply(q.0, q.1);
-            (c.0 + cs * du - sn * dv, c.1 + sn * du + cs * dv)
-        })
-        .collect();
+    let p = placed_off(&truth, &m, &off);
     let resid = |f: &RobustFit, i: usize| {
         let q = f.sim.apply(m[i].0, m[i].1);
         (q.0 - p[i].0).hypot(q.1 - p[i].1)
@@ -191,15 +196,7 @@ fn a_seed_from_the_housing_chooses_the_consensus() {
         (2.45, -1.33),
         (1.82, 3.63),
     ];
-    let (sn, cs) = truth.theta.sin_cos();
-    let p: Vec<_> = m
-        .iter()
-        .zip(off)
-        .map(|(q, (du, dv))| {
-            let c = truth.apply(q.0, q.1);
-            (c.0 + cs * du - sn * dv, c.1 + sn * du + cs * dv)
-        })
-        .collect();
+    let p = placed_off(&truth, &m, &off);
     let resid = |sim: &Similarity, i: usize| {
         let q = sim.apply(m[i].0, m[i].1);
         (q.0 - p[i].0).hypot(q.1 - p[i].1)
