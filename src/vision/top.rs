@@ -319,11 +319,7 @@ pub(crate) fn inspect_top_with<P: Px>(
         position_mm: recipe.tolerance.position_mm,
         fixed,
     };
-    let housing_rect = |sim: &Similarity| outline.rect(sim);
-    let housing_frame = |sim: &Similarity, model: &[(f64, f64)], image: &[(f64, f64)]| {
-        outline.for_few_pins(sim, model, image)
-    };
-    let by_housing = housing_frame(&sim, &model, &image);
+    let by_housing = outline.for_few_pins(&sim, &model, &image);
     if let Some(h) = by_housing {
         sim = h;
         warnings.push(format!(
@@ -458,7 +454,7 @@ pub(crate) fn inspect_top_with<P: Px>(
         let tau = recipe.tolerance.position_mm * sim.s;
         if let Some(f) = fit::consensus_similarity(&model, &image, fixed, Some(sim), 0.1, tau) {
             // The housing read once stays the datum if it is not read again.
-            let f = match housing_frame(&f.sim, &model, &image).or(by_housing) {
+            let f = match outline.for_few_pins(&f.sim, &model, &image).or(by_housing) {
                 Some(h) => fit::RobustFit { sim: h, ..f },
                 None => match outline.consensus(&f.sim, &model, &image) {
                     Some(o) => {
@@ -716,7 +712,7 @@ pub(crate) fn inspect_top_with<P: Px>(
     }
 
     // Housing in the part frame (or the grid's extent as a stand-in).
-    let housing = housing_rect(&sim).map(|(corners_px, extent_mm)| Housing {
+    let housing = outline.rect(&sim).map(|(corners_px, extent_mm)| Housing {
         corners_px,
         extent_mm,
         edge: None,
