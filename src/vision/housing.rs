@@ -167,32 +167,6 @@ pub(crate) fn measure_pose<P: Px>(
     rect: [f64; 4],
     field: (f64, f64),
 ) -> Option<HousingPose> {
-    measure_pose_once(plane, sim, rect, field, false)
-        .or_else(|| measure_pose_once(plane, sim, rect, field, true))
-}
-
-/// [`measure_pose`] once; `lenient` is its second try, for a housing the
-/// first cannot read:
-/// - profiles that leave the frame are cut where the first of them does,
-///   if they still reach past the coarse edge by [`MIN_OUTWARD_PX`],
-///   instead of leaving the side unread (Rust 945 013, a housing end
-///   15 px from the border);
-/// - the step strength's noise is taken from the differences between
-///   neighbouring segments ([`step_noise`]), not from the median strength,
-///   which a broad chamfer ramp along the profile inflates (945 006: 12
-///   against a strongest step of 16, so no step counted).
-///
-/// The first try is kept where it reads the outline: with the lower noise
-/// floor, more steps count as strong and nearly strong, and the choice of
-/// step changed on images it read well (a tried replacement of the first
-/// try lost 925 466 and 945 509; twenty-eighth round).
-fn measure_pose_once<P: Px>(
-    plane: &Plane<P>,
-    sim: &Similarity,
-    rect: [f64; 4],
-    field: (f64, f64),
-    lenient: bool,
-) -> Option<HousingPose> {
     let s = sim.s;
     if !(s > 0.0) || !(rect[1] > rect[0]) || !(rect[3] > rect[2]) {
         return None;
@@ -241,24 +215,10 @@ fn measure_pose_once<P: Px>(
                     acc / ACROSS_PX.len() as f64
                 })
                 .collect();
-            if !lenient && prof.iter().any(|v| !v.is_finite()) {
+            if prof.iter().any(|v| !v.is_finite()) {
                 return None;
             }
             profs.push((t, prof));
-        }
-        let mut n_s = n_s;
-        if lenient {
-            n_s = profs
-                .iter()
-                .map(|p| p.1.iter().take_while(|v| v.is_finite()).count())
-                .min()
-                .unwrap_or(0);
-            if (n_s as f64) * step < w_in + MIN_OUTWARD_PX / s {
-                return None;
-            }
-            for p in &mut profs {
-                p.1.truncate(n_s);
-            }
         }
         // Neighbouring profiles averaged into segments, and each segment's
         // step strength by a box difference: one pixel's step of a faint,
@@ -284,16 +244,12 @@ fn measure_pose_once<P: Px>(
         let gref = grid::median(&mut gmax).unwrap_or(0.0);
         // The noise of a step strength: most samples lie on no step, and
         // the median of |N(0, σ)| is 0.674 σ.
-        let sig_g = if lenient {
-            step_noise(&profs, box_w)
-        } else {
-            let mut all: Vec<f64> = profs
-                .iter()
-                .flat_map(|p| p.1.iter().copied())
-                .filter(|v| *v > 0.0)
-                .collect();
-            grid::median(&mut all).unwrap_or(0.0) / 0.674
-        };
+        let mut all: Vec<f64> = profs
+            .iter()
+            .flat_map(|p| p.1.iter().copied())
+            .filter(|v| *v > 0.0)
+            .collect();
+        let sig_g = grid::median(&mut all).unwrap_or(0.0) / 0.674;
         let strong = (STRONG_STEP * gref).max(STRONG_SIGMAS * sig_g);
         let amb = (AMBIGUOUS_STEP * gref).max(AMBIGUOUS_SIGMAS * sig_g);
         let mut n_amb = 0;
@@ -394,27 +350,6 @@ fn box_steps(prof: &[f64], w: usize) -> Vec<f64> {
         })
         .collect()
 }
-
-/// The noise σ of a step strength: neighbouring segments see the same
-/// edge (and the same chamfer ramp or shading), so the differences of
-/// their strengths at each sample are noise alone, √2 × its σ (robustly,
-/// 1.4826 × their median absolute value).
-fn step_noise(profs: &[(f64, Vec<f64>)], box_w: usize) -> f64 {
-    let mut d: Vec<f64> = profs
-        .windows(2)
-        .flat_map(|w| {
-            let (a, b) = (&w[0].1, &w[1].1);
-            let n = a.len().min(b.len());
-            // Samples within a box of the ends are 0 in both (no window).
-            (box_w..n.saturating_sub(box_w)).map(move |i| (a[i] - b[i]).abs())
-        })
-        .collect();
-    grid::median(&mut d).unwrap_or(0.0) * 1.4826 / std::f64::consts::SQRT_2
-}
-
-/// A profile must reach this far past the coarse edge, px: the box
-/// difference's half-width and two pixels for the coarse edge's error.
-const MIN_OUTWARD_PX: f64 = BOX_PX + 2.0;
 
 /// Offsets across a side (px) whose samples are averaged into one profile
 /// point: a housing edge is straight over a few pixels, the noise is not.
