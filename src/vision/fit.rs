@@ -278,7 +278,7 @@ fn refit_on_consensus(
 }
 
 /// Each point's distance from where `sim` puts its model point (px).
-fn residuals(model: &[(f64, f64)], image: &[(f64, f64)], sim: &Similarity) -> Vec<f64> {
+pub(crate) fn residuals(model: &[(f64, f64)], image: &[(f64, f64)], sim: &Similarity) -> Vec<f64> {
     model
         .iter()
         .zip(image)

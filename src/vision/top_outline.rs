@@ -84,10 +84,9 @@ impl<P: Px> Outline<'_, P> {
             return None;
         }
         let h = self.frame(sim)?;
-        let far = model.iter().zip(image).any(|(m, p)| {
-            let q = h.apply(m.0, m.1);
-            (q.0 - p.0).hypot(q.1 - p.1) > 0.35 * self.pin_pitch_min * h.s
-        });
+        let far = fit::residuals(model, image, &h)
+            .iter()
+            .any(|&r| r > 0.35 * self.pin_pitch_min * h.s);
         (!far).then_some(h)
     }
 
@@ -107,13 +106,9 @@ impl<P: Px> Outline<'_, P> {
         }
         let tau = self.position_mm * sim.s;
         let f = fit::consensus_from_seed(model, image, self.fixed, self.frame(sim)?, tau)?;
-        let kept: Vec<bool> = model
+        let kept: Vec<bool> = fit::residuals(model, image, sim)
             .iter()
-            .zip(image)
-            .map(|(m, p)| {
-                let q = sim.apply(m.0, m.1);
-                (q.0 - p.0).hypot(q.1 - p.1) < tau
-            })
+            .map(|&r| r < tau)
             .collect();
         (f.inlier != kept).then_some(f)
     }
