@@ -27,8 +27,8 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::side_bar::{BarEnd, BarWindow, RowRef, look_again, measure_bar};
 use super::side_edge::{
-    BACKLIGHT, BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, run_tops,
-    silhouette_level, silhouette_threshold, solid_block,
+    BACKLIGHT, BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, level_edge_line,
+    run_tops, silhouette_level, silhouette_threshold, solid_block,
 };
 use super::side_end::{EndAt, row_end_offset};
 use super::side_row::{
@@ -151,9 +151,17 @@ fn inspect_side_runs<P: Px>(
             "no dark block along the image: is this a side view?",
         ));
     }
-    let coarse_line =
-        fit::robust_line(&tops, 1.5).ok_or_else(|| no_housing("no straight top edge"))?;
-    let inl_cols: Vec<usize> = tops
+    let (coarse_line, pool) = match level_edge_line(tops) {
+        Ok(found) => found,
+        Err(None) => return Err(no_housing("no straight top edge")),
+        Err(Some(tilt)) => {
+            return Err(VisionError::WrongPart {
+                part,
+                msg: format!("housing edge tilted {tilt:.1}°: not a side view of this part?"),
+            });
+        }
+    };
+    let inl_cols: Vec<usize> = pool
         .iter()
         .zip(&coarse_line.inlier)
         .filter(|(_, i)| **i)
@@ -161,13 +169,6 @@ fn inspect_side_runs<P: Px>(
         .collect();
     if inl_cols.len() < 6 {
         return Err(no_housing("too few columns on the housing's top edge"));
-    }
-    let tilt = coarse_line.line.b.atan().to_degrees();
-    if tilt.abs() > grid::MAX_TILT_DEG {
-        return Err(VisionError::WrongPart {
-            part,
-            msg: format!("housing edge tilted {tilt:.1}°: not a side view of this part?"),
-        });
     }
     let (hx0_c, hx1_c) = (
         *inl_cols.iter().min().unwrap_or(&0),

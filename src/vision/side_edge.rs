@@ -3,7 +3,9 @@
 //! no pin stands), and the columns near a pin left out of the sub-pixel
 //! edge. Kept apart from `side.rs` (the pipeline).
 
+use super::fit::{LineFit, robust_line};
 use super::gray::{Plane, Px};
+use super::grid::MAX_TILT_DEG;
 use super::label::{Blob, Run};
 
 /// The backlight's level after `backlight::normalise_backlight` (sign
@@ -231,6 +233,38 @@ pub(super) fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
         )
         .map(|i| tops[i])
         .collect()
+}
+
+/// The housing's top edge through the run tops: a robust line no more
+/// tilted than [`MAX_TILT_DEG`], with the tops it was fitted among.
+/// A backlight's boundary the backlight model leaves (a ramp of light
+/// across a small part, a clipped plateau's rim) can give the longest runs
+/// a line of its own: tilted past what a housing can be, its tops are set
+/// aside and the edge sought again among the rest (970 686: a ramp's dim
+/// side cut the frame's corner at 49°, and the 1 × 2 part's level edge
+/// lay in the tops it left). `Err(None)`: no line at all; `Err(Some(t))`:
+/// only a line tilted `t`°, too few tops left beside it.
+pub(super) fn level_edge_line(
+    tops: Vec<(f64, f64)>,
+) -> Result<(LineFit, Vec<(f64, f64)>), Option<f64>> {
+    let mut pool = tops;
+    loop {
+        let line = robust_line(&pool, 1.5).ok_or(None)?;
+        let tilt = line.line.b.atan().to_degrees();
+        if tilt.abs() <= MAX_TILT_DEG {
+            return Ok((line, pool));
+        }
+        let rest: Vec<(f64, f64)> = pool
+            .iter()
+            .zip(&line.inlier)
+            .filter(|(_, i)| !**i)
+            .map(|(p, _)| *p)
+            .collect();
+        if rest.len() < 8 || rest.len() == pool.len() {
+            return Err(Some(tilt));
+        }
+        pool = rest;
+    }
 }
 
 /// The coarse pixels of the bars (pins) standing on the housing.

@@ -146,3 +146,47 @@ fn blurred_rounded_pin_ends_are_measured_at_their_apex() {
         assert_eq!(p.status, PinStatus::Ok, "{p:?}");
     }
 }
+
+/// A small 1 × 2 part at the bottom of a wide frame whose backlight falls
+/// off in a corner (a ramp of light the cubic backlight leaves, as in
+/// 970 686): the corner's dim wedge reads as silhouette and its boundary,
+/// at 45°, holds more run tops than the part's own edge. The edge is
+/// sought again without the tilted line's tops: both pins are found, ok,
+/// at 2.0 mm (before, the image was refused as "housing edge tilted").
+#[test]
+fn a_dim_wedge_of_backlight_tilted_past_a_housing_is_set_aside() {
+    let (w, h) = (320usize, 240usize);
+    let mut d = vec![200u8; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            if x + (h - y) < 130 {
+                d[y * w + x] = 95;
+            }
+        }
+    }
+    for y in 200..h {
+        d[y * w + 150..y * w + 210].fill(60);
+    }
+    for c in [167, 187] {
+        for y in 160..200 {
+            d[y * w + c..y * w + c + 7].fill(60);
+        }
+    }
+    let recipe = Recipe::from_toml_str(
+        "part_number = \"S2\"\nview = \"side\"\nrows = 1\ncols = 2\npitch_mm = [1.0, 1.0]\npin_mm = 0.35\npin_shape = \"square\"\npolarity = \"dark\"\nmm_per_px = 0.05\n[tolerance]\nposition_mm = 0.1\nheight_mm = 2.0\nheight_tol_mm = 0.1\n",
+        "s2",
+    )
+    .unwrap();
+    let g = Gray {
+        width: w as u32,
+        height: h as u32,
+        data: GrayData::U8(d),
+    };
+    let ins = inspect_gray(&recipe, &g, Default::default(), &InspectOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(ins.pins.len(), 2);
+    for p in &ins.pins {
+        assert_eq!(p.status, PinStatus::Ok, "{p:?}");
+        assert!((p.height_mm.unwrap() - 2.0).abs() < 0.02, "{p:?}");
+    }
+}
