@@ -235,6 +235,10 @@ pub(super) fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// A level edge line and the run tops it was fitted among (its `inlier`
+/// flags index these).
+pub(super) type LevelEdge = (LineFit, Vec<(f64, f64)>);
+
 /// The housing's top edge through the run tops: a robust line no more
 /// tilted than [`MAX_TILT_DEG`], with the tops it was fitted among.
 /// A backlight's boundary the backlight model leaves (a ramp of light
@@ -244,9 +248,7 @@ pub(super) fn drop_steep_tops(tops: &[(f64, f64)]) -> Vec<(f64, f64)> {
 /// side cut the frame's corner at 49°, and the 1 × 2 part's level edge
 /// lay in the tops it left). `Err(None)`: no line at all; `Err(Some(t))`:
 /// only a line tilted `t`°, too few tops left beside it.
-pub(super) fn level_edge_line(
-    tops: Vec<(f64, f64)>,
-) -> Result<(LineFit, Vec<(f64, f64)>), Option<f64>> {
+pub(super) fn level_edge_line(tops: Vec<(f64, f64)>) -> Result<LevelEdge, Option<f64>> {
     let mut pool = tops;
     loop {
         let line = robust_line(&pool, 1.5).ok_or(None)?;
