@@ -242,11 +242,11 @@ pub(super) type LevelEdge = (LineFit, Vec<(f64, f64)>);
 /// The housing's top edge through the run tops: a robust line no more
 /// tilted than [`MAX_TILT_DEG`], with the tops it was fitted among.
 /// A backlight's boundary the backlight model leaves (a ramp of light
-/// across a small part, a clipped plateau's rim) can give the longest runs
-/// a line of its own: tilted past what a housing can be, its tops are set
-/// aside and the edge sought again among the rest (970 686: a ramp's dim
-/// side cut the frame's corner at 49°, and the 1 × 2 part's level edge
-/// lay in the tops it left). `Err(None)`: no line at all; `Err(Some(t))`:
+/// across a small part) can give the longest runs a line of their own:
+/// tilted past what a housing can be, its tops are set aside and the edge
+/// sought again among the rest (970 686: a ramp's dim side cut the
+/// frame's corner at 49°, and the 1 × 2 part's level edge lay in the tops
+/// it left). `Err(None)`: no line at all; `Err(Some(t))`:
 /// only a line tilted `t`°, too few tops left beside it.
 pub(super) fn level_edge_line(tops: Vec<(f64, f64)>) -> Result<LevelEdge, Option<f64>> {
     let mut pool = tops;
