@@ -246,12 +246,15 @@ pub(super) type LevelEdge = (LineFit, Vec<(f64, f64)>);
 /// tilted past what a housing can be, its tops are set aside and the edge
 /// sought again among the rest (970 686: a ramp's dim side cut the
 /// frame's corner at 49°, and the 1 × 2 part's level edge lay in the tops
-/// it left). `Err(None)`: no line at all; `Err(Some(t))`:
-/// only a line tilted `t`°, too few tops left beside it.
+/// it left). `Err(None)`: no line at all; `Err(Some(t))`: only a line
+/// tilted `t`°, with too few tops beside it or no line among them.
 pub(super) fn level_edge_line(tops: Vec<(f64, f64)>) -> Result<LevelEdge, Option<f64>> {
     let mut pool = tops;
+    // The last tilted line's angle: what the refusal names when the tops
+    // left beside it hold no line at all.
+    let mut tilted = None;
     loop {
-        let line = robust_line(&pool, 1.5).ok_or(None)?;
+        let line = robust_line(&pool, 1.5).ok_or(tilted)?;
         let tilt = line.line.b.atan().to_degrees();
         if tilt.abs() <= MAX_TILT_DEG {
             return Ok((line, pool));
@@ -265,6 +268,7 @@ pub(super) fn level_edge_line(tops: Vec<(f64, f64)>) -> Result<LevelEdge, Option
         if rest.len() < 8 || rest.len() == pool.len() {
             return Err(Some(tilt));
         }
+        tilted = Some(tilt);
         pool = rest;
     }
 }
