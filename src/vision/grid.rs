@@ -270,6 +270,114 @@ pub fn estimate_lattice(
     Ok(lat)
 }
 
+/// Points of `pts` within `tol` pitch of a node of `lat`, and the sum of
+/// their squared residuals (pitch units).
+fn on_nodes(lat: &Lattice, pts: &[(f64, f64)], tol: f64) -> (usize, f64) {
+    pts.iter()
+        .fold((0, 0.0), |(n, r2), &p| match index_of(lat, p, tol) {
+            Some(i) => (n + 1, r2 + i.ra * i.ra + i.rb * i.rb),
+            None => (n, r2),
+        })
+}
+
+/// Tolerance (pitch units) within which a point counts as on a node when
+/// lattices are compared: the vote in [`estimate_lattice`]'s own.
+const NODE_TOL: f64 = 0.2;
+
+/// With the scale estimated, the lattice the points themselves agree on
+/// when it explains more of them than `prior` does.
+///
+/// The prior's pitch comes from the scale estimate, and on parts of two to
+/// four pins a bent pin's pair can be the only pair one prior pitch apart.
+/// Rust seed 965 725 (a 1 × 6 with one pin missing and one bent, no
+/// `mm_per_px`): the estimate gave 26.7 px against a true 31.4; the bent
+/// pin and its neighbour, 27.2 px apart, became the lattice and the other
+/// two tips fell off it, one set aside 2 mm "from the housing". Here every
+/// pair of points along a row (or a column) spaced k = 1 … cols − 1 pitches
+/// proposes a lattice (its direction, its spacing / k, its first point as
+/// origin), pitches 0.7–1.45 × the prior's only. A proposal counts only
+/// if it keeps every point on the prior's nodes on its own (Rust seed
+/// 945 437: a dozen noise blobs about a 1 × 10 row fit a lattice tilted
+/// 7° by chance, but not with the row's tips). The proposal that puts the
+/// most points on its nodes wins (ties: the smaller residual), and only if
+/// it puts at least three there and more than the prior does. Two points
+/// fit any pair's lattice, so they never overrule the estimate.
+pub fn lattice_by_consensus(
+    pts: &[(f64, f64)],
+    prior: &Lattice,
+    rows: u32,
+    cols: u32,
+) -> Option<Lattice> {
+    const MAX_POINTS: usize = 24;
+    let n = pts.len();
+    if !(3..=MAX_POINTS).contains(&n) {
+        return None;
+    }
+    let on_prior: Vec<bool> = pts
+        .iter()
+        .map(|&p| index_of(prior, p, NODE_TOL).is_some())
+        .collect();
+    let prior_n = on_prior.iter().filter(|&&b| b).count();
+    if prior_n == n {
+        return None;
+    }
+    let tilt = MAX_TILT_DEG.to_radians();
+    let ratio = prior.py / prior.px;
+    let mut best: Option<(usize, f64, Lattice)> = None;
+    for i in 0..n {
+        for j in 0..n {
+            if i == j {
+                continue;
+            }
+            let (dx, dy) = (pts[j].0 - pts[i].0, pts[j].1 - pts[i].1);
+            let ang = dy.atan2(dx);
+            let d = dx.hypot(dy);
+            // Along a row: j to the right of i; along a column: j below i
+            // (each unordered pair once per direction).
+            let along_row = cols > 1 && dx > 0.0 && ang.abs() < tilt;
+            let along_col = rows > 1 && dy > 0.0 && (PI / 2.0 - ang).abs() < tilt;
+            let (steps, theta) = match (along_row, along_col) {
+                (true, _) => (cols - 1, ang),
+                (_, true) => (rows - 1, ang - PI / 2.0),
+                _ => continue,
+            };
+            for k in 1..=steps {
+                let step = d / k as f64;
+                let px = if along_row { step } else { step / ratio };
+                if !(0.7..=1.45).contains(&(px / prior.px)) {
+                    continue;
+                }
+                let lat = Lattice {
+                    theta,
+                    px,
+                    py: px * ratio,
+                    origin: pts[i],
+                };
+                // It must keep every point the prior explains: noise
+                // blobs scattered about a row fit some lattice by chance,
+                // never one that also holds the prior's tips.
+                let keeps = pts
+                    .iter()
+                    .zip(&on_prior)
+                    .all(|(&p, &on)| !on || index_of(&lat, p, NODE_TOL).is_some());
+                if !keeps {
+                    continue;
+                }
+                let (m, r2) = on_nodes(&lat, pts, NODE_TOL);
+                let better = match &best {
+                    None => true,
+                    Some((bm, br2, _)) => m > *bm || (m == *bm && r2 < *br2),
+                };
+                if better {
+                    best = Some((m, r2, lat));
+                }
+            }
+        }
+    }
+    let (m, _, lat) = best?;
+    (m >= 3 && m > prior_n).then_some(lat)
+}
+
 /// A point's place on the lattice.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LatticeIndex {
@@ -591,5 +699,61 @@ mod tests {
         assert!(refine_lattice(&prior, &on_nodes[..2]).is_none());
         let same_node = vec![on_nodes[0]; 4];
         assert!(refine_lattice(&prior, &same_node).is_none());
+    }
+
+    /// Rust seed 965 725's tips (a 1 × 6 tilted 4.9°, pitch 31.4 px, with
+    /// position 1 missing, position 3 bent 3.5 px towards 2 and position 5
+    /// skipped) under a scale prior of 26.7 px: only the bent pair is one
+    /// prior pitch apart. The tips' own lattice explains all four; a
+    /// complete set of tips, two tips, or noise blobs on a line that does
+    /// not hold the prior's tips leave the prior alone.
+    #[test]
+    fn the_tips_own_lattice_overrules_a_prior_only_a_bent_pair_fits() {
+        let truth = Lattice {
+            theta: 4.9f64.to_radians(),
+            px: 31.4,
+            py: 31.4,
+            origin: (117.7, 128.7),
+        };
+        let mut tips: Vec<(f64, f64)> = [0.0, 2.0, 3.0, 4.0]
+            .iter()
+            .map(|&a| truth.to_image(a, 0.0))
+            .collect();
+        tips[2].0 -= 3.5;
+        let prior = estimate_lattice(&tips, Some((26.7, 26.7)), 1.0, 1, 6).unwrap();
+        let on_prior = tips.iter().filter(|&&p| index_of(&prior, p, 0.2).is_some());
+        assert_eq!(
+            on_prior.count(),
+            2,
+            "the case: the prior fits the bent pair only"
+        );
+        let l = lattice_by_consensus(&tips, &prior, 1, 6).unwrap();
+        assert!((l.px / 31.4 - 1.0).abs() < 0.02, "pitch {}", l.px);
+        assert!(
+            (l.theta - truth.theta).abs() < 1f64.to_radians(),
+            "{}",
+            l.theta
+        );
+        let a: Vec<i64> = tips
+            .iter()
+            .map(|&p| index_of(&l, p, 0.2).map_or(-99, |i| i.a))
+            .collect();
+        let a0 = a[0];
+        assert_eq!(a.iter().map(|x| x - a0).collect::<Vec<_>>(), [0, 2, 3, 4]);
+        // Every tip on the prior's nodes, or two tips only: the prior stays.
+        let full: Vec<(f64, f64)> = (0..5).map(|a| prior.to_image(a as f64, 0.0)).collect();
+        assert!(lattice_by_consensus(&full, &prior, 1, 6).is_none());
+        assert!(lattice_by_consensus(&[tips[0], tips[1]], &prior, 1, 6).is_none());
+        // Three noise blobs on a line of their own (7° and 36.8 px) beside
+        // two tips on the prior: more points, but not the tips'.
+        let prior = Lattice {
+            theta: 0.0,
+            px: 38.85,
+            py: 38.85,
+            origin: (0.0, 0.0),
+        };
+        let mut p = vec![(0.0, 0.0), (38.85, 0.0)];
+        p.extend((0..3).map(|k| (100.0 + 36.5 * k as f64, 30.0 + 4.7 * k as f64)));
+        assert!(lattice_by_consensus(&p, &prior, 1, 10).is_none());
     }
 }

@@ -377,6 +377,32 @@ pub fn estimate<P: Px>(
     })
 }
 
+/// Whether the tips' measured areas (`areas`, each over the tip area the
+/// estimated scale expects) allow that scale changed by the factor `f`:
+/// area goes as the scale squared, so the median area's log must lie no
+/// further from ln f² than from 0 by more than [`AREA_SLACK`].
+///
+/// Points alone cannot tell a lattice from another when a few of them
+/// hold a bent pin: Rust seed 925 232, tips 43.4 and 28.1 px apart (the
+/// second pair's tip bent 0.22 pitch), fit a lattice of 23.9 px at 0, 1.82
+/// and 3 pitches as well as the estimate's 28 px fits the bent pair; its
+/// tips measure 1.48 × the estimate's area, where 23.9 px would make them
+/// 0.73 ×, so the estimate stands (the truth, 35.7 px, would be 1.63 ×).
+/// A change of 10 % is within what blur and the threshold do to an area:
+/// Python seed 730 124's tips (blur 2.2 px) measure 1.12 × where its true
+/// lattice, 12 % above the estimate, makes them 1.26 ×.
+pub fn areas_allow(areas: &[f64], f: f64) -> bool {
+    let mut a: Vec<f64> = areas.iter().copied().filter(|a| *a > 0.0).collect();
+    match super::grid::median(&mut a) {
+        Some(m) => (m.ln() - 2.0 * f.ln()).abs() < m.ln().abs() + AREA_SLACK,
+        None => false,
+    }
+}
+
+/// How much further (in log area) the tips' median area may sit from a
+/// proposed scale than from the estimate ([`areas_allow`]): ±20 %.
+const AREA_SLACK: f64 = 0.2;
+
 /// Whether `fine` is a half or a third of `coarse` (±10 %): the only way a
 /// lattice of tips held at two or three pitches apart can be wrong is in
 /// the multiple (its tips are tips), so a period counts against it only

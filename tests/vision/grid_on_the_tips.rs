@@ -31,6 +31,14 @@
 //!   window (the top-hat at one point per node) beat it by 0.525 against a
 //!   margin of 0.526. The evidence is now averaged over a patch of a
 //!   quarter tip either side where the noise sets the margin.
+//! - 965 725 and 955 473 (since 2026-12-05): a 1 × 6 with a pin missing and
+//!   one bent, and a 1 × 3 with its middle pin bent, no `mm_per_px`. The
+//!   scale estimate came out 15 % short and 22 % long; only the bent pin's
+//!   pair stood one estimated pitch apart, so that pair became the lattice
+//!   and the other tips fell off it (965 725: its first tip set aside
+//!   "2.09 mm from the housing"). The lattice the tips agree on now
+//!   overrules the estimate when it explains more of them
+//!   (`grid::lattice_by_consensus`).
 
 use crate::common;
 use pinsight::vision::synth_envelope::Rendered;
@@ -83,5 +91,21 @@ fn a_blurred_parts_grid_is_fitted_to_all_its_tips_and_a_noisy_end_found_by_evide
     for seed in [955_085u64, 955_104] {
         let worst = right_and_clean(seed);
         assert!(worst < 1.5, "{seed}: an ok pin's centre {worst:.2} px off");
+    }
+}
+
+#[test]
+fn a_bent_pins_pair_does_not_set_the_pitch_of_a_few_pin_part() {
+    for seed in [965_725u64, 955_473] {
+        right_and_clean(seed);
+        let (case, _, ins) = common::envelope_case(seed);
+        let grid = &ins.grid;
+        let truth = case.factors.mm_per_px;
+        // Before: 0.0367 against 0.0319 (965 725), 0.0265 against 0.0301.
+        assert!(
+            (grid.mm_per_px / truth - 1.0).abs() < 0.02,
+            "{seed}: mm_per_px {} against {truth}",
+            grid.mm_per_px
+        );
     }
 }
