@@ -15,7 +15,10 @@
 //! 95.4 %, 99.30 %, 1 error, 0.069 px; after debris on the housing's edge
 //! is cut from the brighter fixture it touches, 2026-11-26: 95.8 %,
 //! 99.30 %, 1 error, 0.069 px; after blurred tips' energy is summed in a
-//! fixed disc, 2026-11-27: 96.7 %, 99.32 %, 1 error, 0.069 px), not issue 12's targets (≥ 99.5 % verdicts,
+//! fixed disc, 2026-11-27: 96.7 %, 99.32 %, 1 error, 0.069 px; measured
+//! again after the tips' own lattice against an estimated scale,
+//! 2026-12-05: 99.6 % (239/240), 99.68 %, 0 errors, 0.068 px, and the
+//! floors raised to one image and 0.2 % of pins below that), not issue 12's targets (≥ 99.5 % verdicts,
 //! ≥ 99.9 % pin statuses, no errors); docs/vision.md gives the figures
 //! per factor and where the remaining wrong verdicts sit. A change that
 //! lowers them fails; a change that raises them should raise the floors.
@@ -96,18 +99,18 @@ fn verdicts_hold_over_the_randomised_envelope() {
         side.1
     );
     assert!(
-        pct(right, n) >= 96.2,
+        pct(right, n) >= 99.1,
         "connector verdicts right: {:.1} %",
         pct(right, n)
     );
     assert!(
-        pct(pins - pins_wrong, pins) >= 99.2,
+        pct(pins - pins_wrong, pins) >= 99.45,
         "pin statuses right: {:.2} %",
         pct(pins - pins_wrong, pins)
     );
     assert!(
-        errors <= 1,
+        errors == 0,
         "{errors} images inside the envelope ended as errors"
     );
-    assert!(median <= 0.075, "ok-pin centre error median {median:.3} px");
+    assert!(median <= 0.072, "ok-pin centre error median {median:.3} px");
 }

@@ -104,10 +104,14 @@ fn verdicts_hold_on_an_independent_renderers_images() {
 
 // Measured 2026-11-26 on these 60: 59 right (98.3 %), 1 error (a side
 // view whose housing edge was not measurable between the pins), pin
-// statuses 98.49 %, ok-pin centre error median 0.062 px.
-const FLOOR_VERDICTS: f64 = 96.5;
-const FLOOR_PINS: f64 = 98.0;
-const MAX_ERRORS: usize = 2;
+// statuses 98.49 %, ok-pin centre error median 0.062 px. Measured again
+// 2026-12-05: 60 right (100 %), no error, pin statuses 99.88 %, median
+// 0.072 px; the floors raised to one image and 0.3 % of pins below that
+// (the median's bound kept at 0.075 px: it rose from 0.062 to 0.072 px
+// over the rounds since, a cause not traced to one change).
+const FLOOR_VERDICTS: f64 = 98.3;
+const FLOOR_PINS: f64 = 99.55;
+const MAX_ERRORS: usize = 0;
 const MAX_MEDIAN_PX: f64 = 0.075;
 
 /// Large tips without `mm_per_px`: the scale search used to lock onto a
