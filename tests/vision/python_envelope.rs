@@ -95,7 +95,7 @@ fn verdicts_hold_on_an_independent_renderers_images() {
         "pin statuses right {:.2} %",
         pct(pins - pins_wrong, pins)
     );
-    assert!(errors <= MAX_ERRORS, "{errors} images ended as errors");
+    assert_eq!(errors, 0, "{errors} images ended as errors");
     assert!(
         median <= MAX_MEDIAN_PX,
         "ok-pin centre error median {median:.3} px"
@@ -111,7 +111,6 @@ fn verdicts_hold_on_an_independent_renderers_images() {
 // over the rounds since, a cause not traced to one change).
 const FLOOR_VERDICTS: f64 = 98.3;
 const FLOOR_PINS: f64 = 99.55;
-const MAX_ERRORS: usize = 0;
 const MAX_MEDIAN_PX: f64 = 0.075;
 
 /// Large tips without `mm_per_px`: the scale search used to lock onto a
