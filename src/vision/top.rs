@@ -185,19 +185,14 @@ pub(crate) fn inspect_top_with<P: Px>(
     // An estimated scale is a prior: when the tips agree on another
     // lattice that explains more of them, and their areas do not speak
     // against its scale (`scale::areas_allow`), theirs is taken.
-    let areas: Vec<f64> = cands
-        .iter()
-        .filter(|c| c.pinlike)
-        .map(|c| c.m.area_px / tip_px0)
-        .collect();
-    let lat = match grid::lattice_by_consensus(&pin_pts, &lat, recipe.rows, recipe.cols) {
-        Some(alt)
-            if recipe.mm_per_px.is_none() && super::scale::areas_allow(&areas, alt.px / lat.px) =>
-        {
-            alt
-        }
-        _ => lat,
-    };
+    // With `mm_per_px` given the pitch is known: no search.
+    let consensus = recipe.mm_per_px.is_none().then(|| {
+        let alt = grid::lattice_by_consensus(&pin_pts, &lat, recipe.rows, recipe.cols)?;
+        let pinlike = cands.iter().filter(|c| c.pinlike);
+        let areas: Vec<f64> = pinlike.map(|c| c.m.area_px / tip_px0).collect();
+        super::scale::areas_allow(&areas, alt.px / lat.px).then_some(alt)
+    });
+    let lat = consensus.flatten().unwrap_or(lat);
     // Lattice members (pin-like blobs on lattice nodes), read again on
     // the lattice refitted to them.
     let pin_like: Vec<Option<(f64, f64)>> = cands
