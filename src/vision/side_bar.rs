@@ -118,6 +118,15 @@ pub(super) fn measure_bar<P: Px>(
     // bar's measured middle part and inside the frame.
     let sample = |d: f64, y: f64| sign * plane.bilinear(axis.y_at(y) + d, y);
     let limits = (0.0, ya as f64);
+    // The blob's top is a guess: where the bar stays over half its
+    // contrast further up its axis than the end's window reaches, the end
+    // is sought there.
+    let climbed = climb_to_end(&sample, tip_guess, 0.5 * width_px, 0.5 * contrast);
+    let tip_guess = if tip_guess - climbed > win.tip_half {
+        climbed
+    } else {
+        tip_guess
+    };
     let tip = tip_crossing_recentred(&sample, tip_guess, win.tip_half, 0.5 * width_px, limits)?;
     Some(BarEnd {
         axis,
@@ -144,6 +153,31 @@ fn lean_of(upper: Option<f64>, lower: Option<f64>, len: f64) -> f64 {
         (Some(a), Some(b)) => (b - a) / (0.5 * len),
         _ => 0.0,
     }
+}
+
+/// How far up its axis (y px, from `guess`) a bar of half-width `half_w`
+/// stands over the backlight beside it by `rise` (sign space: bar high):
+/// the mean of three samples across its middle, less the mean of the
+/// backlight on both sides (5 px past its edges, clear of a blur of
+/// 2.5 px), over each next two rows, must stay over it. A thin bar under
+/// blur, its upper part dimmed by the backlight's gradient, can fall under
+/// the silhouette's coarse threshold there, and its blob then starts half
+/// way down (Rust 1 010 713: a clean 1 × 2, the blob's top 65 px under the
+/// pin's end; its end was sought inside the bar and the good pin read
+/// short, 1.38 mm for 3.60). Measured against the backlight beside it, not
+/// a level: under vignetting the backlight above a pin's end can be as
+/// dark as the bar (Rust 965 147).
+fn climb_to_end(sample: &dyn Fn(f64, f64) -> f32, guess: f64, half_w: f64, rise: f32) -> f64 {
+    let (d, out) = (0.3 * half_w, half_w + 5.0);
+    let at = |y: f64| {
+        let bar = (sample(-d, y) + sample(0.0, y) + sample(d, y)) / 3.0;
+        bar - 0.5 * (sample(-out, y) + sample(out, y))
+    };
+    let mut y = guess.floor();
+    while y >= 2.0 && 0.5 * (at(y - 1.0) + at(y - 2.0)) > rise {
+        y -= 1.0;
+    }
+    y.min(guess)
 }
 
 /// The bar's interior (inside its half-level edges `l`, `r`, a pixel in
@@ -229,6 +263,32 @@ pub(super) fn look_again<P: Px>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A bar (sign space: bar high) 8 px wide whose end is at y = 20, its
+    /// upper half (y < 60) at 0.6 of its contrast of 100 over a backlight
+    /// of 0: from a guess at 60 the climb reaches the end within a pixel.
+    /// The same bar under a backlight that darkens above its end to the
+    /// bar's own level within 10 px (vignetting; sign space: rising to
+    /// 100): the climb stops at the end, not in the dark backlight above.
+    #[test]
+    fn the_climb_reaches_a_dimmed_bars_end_and_not_the_dark_backlight_above() {
+        for dark_above in [false, true] {
+            let sample = move |d: f64, y: f64| -> f32 {
+                let back = if dark_above && y < 20.0 {
+                    (100.0 * (20.0 - y) / 10.0).min(100.0) as f32
+                } else {
+                    0.0
+                };
+                if d.abs() <= 4.0 && y >= 20.0 {
+                    back.max(if y < 60.0 { 60.0 } else { 100.0 })
+                } else {
+                    back
+                }
+            };
+            let y = climb_to_end(&sample, 60.0, 4.0, 50.0);
+            assert!((y - 20.0).abs() <= 1.0, "dark above {dark_above}: {y}");
+        }
+    }
 
     /// A dark pin 8 px wide on a housing (backlight 200, silhouette 60),
     /// its end at the pixel boundary y = 30 (29.5 in pixel-centre

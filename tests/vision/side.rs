@@ -64,3 +64,25 @@ fn a_housing_under_a_dim_band_or_corner_of_backlight_is_found_and_its_pins_read(
         }
     }
 }
+
+/// A clean good 1 × 2 (1 010 713, fresh held-out seed read on 2026-12-05:
+/// contrast 0.33, σ 0.3 DN, blur 1.8 px, a 13 % gradient) whose thinner
+/// second bar fell under the silhouette's coarse threshold over its upper
+/// half: its blob began 65 px under the pin's end, the end was sought
+/// inside the bar and the pin read short (1.38 mm for 3.60). The end is
+/// now sought as far up the axis as the bar stands over the backlight
+/// beside it (`side_bar::climb_to_end`). Both ends within 2.5 px (before:
+/// 63.6 px).
+#[test]
+fn a_bar_whose_upper_half_the_coarse_threshold_lost_is_measured_to_its_end() {
+    let (case, r, ins) = common::envelope_case(1_010_713);
+    assert!(case.factors.defects.is_empty(), "a good part");
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    assert_eq!(c.height_errors.len(), 2);
+    for e in &c.height_errors {
+        let px = e / case.factors.mm_per_px;
+        assert!(px.abs() < 2.5, "height error {px:.2} px");
+    }
+}
