@@ -118,9 +118,9 @@ pub(super) fn measure_bar<P: Px>(
     // bar's measured middle part and inside the frame.
     let sample = |d: f64, y: f64| sign * plane.bilinear(axis.y_at(y) + d, y);
     let limits = (0.0, ya as f64);
-    // The blob's top is a guess: where the bar stays over half its
-    // contrast further up its axis than the end's window reaches, the end
-    // is sought there.
+    // The blob's top is a guess: where the bar still stands over the
+    // backlight beside it by half its contrast further up its axis than
+    // the end's window reaches, the end is sought there (`climb_to_end`).
     let climbed = climb_to_end(&sample, tip_guess, 0.5 * width_px, 0.5 * contrast);
     let tip_guess = if tip_guess - climbed > win.tip_half {
         climbed
