@@ -270,16 +270,6 @@ pub fn estimate_lattice(
     Ok(lat)
 }
 
-/// Points of `pts` within `tol` pitch of a node of `lat`, and the sum of
-/// their squared residuals (pitch units).
-fn on_nodes(lat: &Lattice, pts: &[(f64, f64)], tol: f64) -> (usize, f64) {
-    pts.iter()
-        .fold((0, 0.0), |(n, r2), &p| match index_of(lat, p, tol) {
-            Some(i) => (n + 1, r2 + i.ra * i.ra + i.rb * i.rb),
-            None => (n, r2),
-        })
-}
-
 /// Tolerance (pitch units) within which a point counts as on a node when
 /// lattices are compared: the vote in [`estimate_lattice`]'s own.
 const NODE_TOL: f64 = 0.2;
@@ -353,17 +343,16 @@ pub fn lattice_by_consensus(
                     py: px * ratio,
                     origin: pts[i],
                 };
+                let at: Vec<Option<LatticeIndex>> =
+                    pts.iter().map(|&p| index_of(&lat, p, NODE_TOL)).collect();
                 // It must keep every point the prior explains: noise
                 // blobs scattered about a row fit some lattice by chance,
                 // never one that also holds the prior's tips.
-                let keeps = pts
-                    .iter()
-                    .zip(&on_prior)
-                    .all(|(&p, &on)| !on || index_of(&lat, p, NODE_TOL).is_some());
-                if !keeps {
+                if at.iter().zip(&on_prior).any(|(i, &on)| on && i.is_none()) {
                     continue;
                 }
-                let (m, r2) = on_nodes(&lat, pts, NODE_TOL);
+                let m = at.iter().flatten().count();
+                let r2: f64 = at.iter().flatten().map(|i| i.ra * i.ra + i.rb * i.rb).sum();
                 let better = match &best {
                     None => true,
                     Some((bm, br2, _)) => m > *bm || (m == *bm && r2 < *br2),
