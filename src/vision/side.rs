@@ -27,8 +27,8 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::side_bar::{BarEnd, BarWindow, RowRef, look_again, measure_bar};
 use super::side_edge::{
-    BACKLIGHT, BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, level_edge_line,
-    run_tops, silhouette_level, silhouette_threshold, solid_block,
+    BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, level_edge_line, run_tops,
+    solid_block,
 };
 use super::side_end::{EndAt, row_end_offset};
 use super::side_row::{
@@ -104,29 +104,17 @@ fn inspect_side_runs<P: Px>(
     // The full-resolution steps below are compared with the raw range.
     let (r_lo, r_hi) = detect::robust_range(&coarse.data);
     let contrast = r_hi - r_lo;
-    if sign < 0.0 {
-        // Back-lit silhouette: divide by the backlight, so vignetting and
-        // gradients leave the backlight at one level everywhere.
-        backlight::normalise_backlight(&mut coarse);
-    }
     let (cw, ch) = (coarse.w, coarse.h);
-    let mut t = detect::otsu(&coarse.data, cw, ch);
-    // The silhouette's depth below the backlight (share of it), where the
-    // backlight is divided out.
-    let mut depth: Option<f32> = None;
-    if sign < 0.0 {
-        // What the cubic backlight leaves, flattened over about 36 px
-        // (bands and patches wider than that), the silhouette's level
-        // taken first; then the threshold again on the flattened image.
-        if let Some(level) = silhouette_level(&coarse.data, t) {
-            let radius = (36 / k).max(2);
-            let dilate = 6usize.div_ceil(k).max(1);
-            backlight::flatten_residual(&mut coarse, level, radius, dilate);
-            t = detect::otsu(&coarse.data, cw, ch);
-        }
-        t = silhouette_threshold(&coarse.data, t);
-        depth = silhouette_level(&coarse.data, t).map(|l| (l - BACKLIGHT) / -BACKLIGHT);
-    }
+    // Back-lit silhouette: the backlight divided out (vignetting and
+    // gradients leave it at one level everywhere), under heavy noise a box
+    // no wider than a pin first; and the silhouette's depth below the
+    // backlight (share of it).
+    let (t, depth) = if sign < 0.0 {
+        let widest = pin_px_prior.map_or(3, |p| (p / k as f64) as usize);
+        backlight::silhouette_threshold_flat(plane, &mut coarse, sign, widest)
+    } else {
+        (detect::otsu(&coarse.data, cw, ch), None)
+    };
     let fg = |x: usize, y: usize| coarse.at(x, y) > t;
 
     // 1. Housing edge, coarse: top of the longest silhouette run per column.

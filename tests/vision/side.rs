@@ -86,3 +86,25 @@ fn a_bar_whose_upper_half_the_coarse_threshold_lost_is_measured_to_its_end() {
         assert!(px.abs() < 2.5, "height error {px:.2} px");
     }
 }
+
+/// Rust 1 030 800: a 1 × 4 part in the corner of a dim, noisy frame (σ
+/// 15 DN, gain 0.78, vignetting 0.40, pins 7 px wide at coarse factor 1).
+/// The silhouette's half level stood about one σ above the backlight: the
+/// pins drowned in the backlight that passed the threshold, and noise
+/// clumps in a dim corner 500 px away stood on the housing's edge line as
+/// the pins (2 "short", 2 missing, ok-pin centres 520 px off). A box mean
+/// no wider than a pin now lifts the half level to 4 σ first
+/// (`backlight::smoothing_radius`).
+#[test]
+fn a_part_in_a_dim_noisy_frame_is_found_where_it_stands() {
+    let (case, r, ins) = common::envelope_case(1_030_800);
+    assert!(case.factors.defects.is_empty(), "a good part");
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    assert_eq!(c.centre_errors.len(), 4);
+    for &(_, col, _, dx, dy) in &c.centre_errors {
+        let e = dx.hypot(dy);
+        assert!(e < 1.0, "pin {col}'s centre {e:.2} px off");
+    }
+}
