@@ -200,7 +200,8 @@ fn estimate_faint(
 /// the noise floor's 6 σ), the second pass with the wider box finds the
 /// scene's scale (0.5 mm tips at 0.07 mm/px: 7.14 px) at least once,
 /// and never a wrong one; where the first pass finds a lattice, the
-/// estimate is the first pass's (unchanged).
+/// estimate is the first pass's, or the period's where the first pass's
+/// was a lattice of several pitches on too few pairs (and then right).
 #[test]
 fn small_faint_tips_are_found_by_the_second_pass() {
     let r = recipe(2, 8, "");
@@ -212,7 +213,18 @@ fn small_faint_tips_are_found_by_the_second_pass() {
             let first = estimate_faint(&r, 0.07, c, n, b, seed, Some(Smoothing::Normal));
             let full = estimate_faint(&r, 0.07, c, n, b, seed, None);
             match (&first, &full) {
-                (Ok(a), Ok(e)) => assert_eq!(a, e, "contrast {c} seed {seed}"),
+                // The first pass's estimate stands, unless it was a
+                // lattice of several pitches on a pair or two, which
+                // gives way to the period; then the period is right
+                // (contrast 0.3, seed 1: 9.62 px held by one pair, the
+                // period 7.137 px).
+                (Ok(a), Ok(e)) if a != e => {
+                    assert!(
+                        e.from_period && (e.pin_px / truth - 1.0).abs() < 0.05,
+                        "contrast {c} seed {seed}: {a:?} became {e:?}"
+                    );
+                }
+                (Ok(_), Ok(_)) => {}
                 (Err(_), Ok(e)) => {
                     assert!(
                         (e.pin_px / truth - 1.0).abs() < 0.05,
