@@ -242,11 +242,21 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             break;
         }
         if args.until_finished && follower.all_finished() {
-            // Images written just before the footer: one last look.
+            // Images written just before the footer: one last look, and on
+            // while the folder or the queue holds more than one poll
+            // inspects (64): with the queue empty when the log finished,
+            // a single look read 64 of the 149 images written meanwhile.
             std::thread::sleep(std::time::Duration::from_millis(
                 crate::live::folder::SETTLE_MS + 50,
             ));
-            emit(&follower.poll(None).events)?;
+            loop {
+                emit(&follower.poll(None).events)?;
+                let out_of_time = stop.load(Ordering::Relaxed)
+                    || max.is_some_and(|m| started.elapsed().as_secs_f64() > m);
+                if !follower.behind() || out_of_time {
+                    break;
+                }
+            }
             break;
         }
         changed = wake.next(follower.behind()).changed;
