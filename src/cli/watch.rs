@@ -233,11 +233,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         Ok(())
     };
+    let out_of_time =
+        || stop.load(Ordering::Relaxed) || max.is_some_and(|m| started.elapsed().as_secs_f64() > m);
     loop {
         let batch = follower.poll(changed.as_deref());
         emit(&batch.events)?;
-        if stop.load(Ordering::Relaxed) || max.is_some_and(|m| started.elapsed().as_secs_f64() > m)
-        {
+        if out_of_time() {
             emit(&follower.stop().events)?;
             break;
         }
@@ -251,9 +252,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             ));
             loop {
                 emit(&follower.poll(None).events)?;
-                let out_of_time = stop.load(Ordering::Relaxed)
-                    || max.is_some_and(|m| started.elapsed().as_secs_f64() > m);
-                if !follower.behind() || out_of_time {
+                if !follower.behind() || out_of_time() {
                     break;
                 }
             }

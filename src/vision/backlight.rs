@@ -149,8 +149,8 @@ pub(crate) fn flatten_residual(c: &mut Coarse, level: f32, radius: usize, dilate
 
 /// The silhouette's threshold on a back-lit coarse image (`sign` space,
 /// built from `plane`), and the silhouette's depth below the backlight
-/// (share of it, where a silhouette is found); `coarse` is left normalised and flattened, the image
-/// the threshold applies to.
+/// (share of it, where a silhouette is found); `coarse` is left
+/// normalised and flattened, the image the threshold applies to.
 ///
 /// The backlight is divided out ([`normalise_backlight`]); under noise
 /// comparable to the silhouette's half level the image is first box
@@ -220,7 +220,7 @@ const MIN_HALF_LEVEL_SNR: f32 = 4.0;
 /// few to move it), as a σ of one pixel.
 pub(crate) fn smoothing_radius(c: &Coarse, t: f32, max_width: usize) -> (usize, f32) {
     let (w, h) = (c.w, c.h);
-    let half = t - -1000.0;
+    let half = t - BACKLIGHT;
     if w < 2 || h == 0 || !(half > 0.0) {
         return (0, 0.0);
     }
