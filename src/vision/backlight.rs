@@ -160,11 +160,18 @@ pub(crate) fn flatten_residual(c: &mut Coarse, level: f32, radius: usize, dilate
 /// level taken first; the threshold is then Otsu's on the flattened
 /// image, never nearer the backlight than halfway to the silhouette's
 /// level ([`super::side_edge::silhouette_threshold`]).
+///
+/// `min_depth` (share of the backlight) is the least depth the
+/// silhouette's level is taken at when flattening: 0 at first; a retry
+/// passes the envelope's least contrast, for a frame whose darkest
+/// percent is a backlight band the cubic left, not the housing (see
+/// [`super::side::inspect_side`]).
 pub(crate) fn silhouette_threshold_flat<P: Px>(
     plane: &Plane<P>,
     coarse: &mut Coarse,
     sign: f32,
     widest: usize,
+    min_depth: f32,
 ) -> (f32, Option<f32>) {
     let (cw, ch, k) = (coarse.w, coarse.h, coarse.k);
     normalise_backlight(coarse);
@@ -189,7 +196,12 @@ pub(crate) fn silhouette_threshold_flat<P: Px>(
     if let Some(level) = silhouette_level(&coarse.data, t.max(floor)) {
         let radius = (36 / k).max(2);
         let dilate = 6usize.div_ceil(k).max(1);
-        flatten_residual(coarse, level, radius, dilate);
+        flatten_residual(
+            coarse,
+            level.max(BACKLIGHT * (1.0 - min_depth)),
+            radius,
+            dilate,
+        );
         t = detect::otsu(&coarse.data, cw, ch);
     }
     if let Some(level) = silhouette_level(&coarse.data, t.max(floor)) {

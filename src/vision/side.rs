@@ -59,12 +59,35 @@ const DUST_MIN_CONTRAST: f64 = 0.4;
 /// small one, blurred, still about half way).
 const DUST_MIN_CORE: f64 = 0.5 * DUST_MIN_CONTRAST;
 
+/// How one attempt at a side view reads the silhouette (see
+/// [`inspect_side`]).
+#[derive(Clone, Copy)]
+struct Attempt {
+    /// The housing edge's runs read on the coarse image's 3 × 3 mean.
+    smooth_runs: bool,
+    /// Least depth the silhouette's level is taken at when the backlight
+    /// is flattened (share of the backlight).
+    min_depth: f32,
+}
+
 /// Inspects one side-view image. When the housing is not found (or no pin
-/// on what was taken for it), its edge is sought again with the runs read
-/// on the coarse image's 3 × 3 mean: noise pricks holes in a low-contrast
-/// housing and speckles a dim band above it, and the band's tops then
-/// outnumbered the block's (965 068, contrast 0.37). Smoothed first, a
-/// mottled backlight's patches outran a thin housing (Python 590 048).
+/// on what was taken for it, or its edge steeper than a side view's), it
+/// is sought again:
+/// - with the runs read on the coarse image's 3 × 3 mean: noise pricks
+///   holes in a low-contrast housing and speckles a dim band above it, and
+///   the band's tops then outnumbered the block's (965 068, contrast
+///   0.37). Smoothed first, a mottled backlight's patches outran a thin
+///   housing (Python 590 048);
+/// - with the backlight flattened as if the silhouette were at least the
+///   envelope's least contrast deep: a small part in a large frame (Rust
+///   1 050 098: the housing 0.4 % of a 3.5 Mpx frame) is not the frame's
+///   darkest percent, and when the cubic backlight leaves a band (a
+///   gradient that levels off beyond the part) the band's 13 % was taken
+///   for the silhouette's level, kept out of the flattening as "surely
+///   silhouette", and its edge, 70° off, for the housing's.
+///
+/// The first attempt that succeeds stands; when none does, the first's
+/// error is reported.
 pub fn inspect_side<P: Px>(
     recipe: &Recipe,
     plane: &Plane<P>,
@@ -73,23 +96,49 @@ pub fn inspect_side<P: Px>(
     opts: &InspectOptions,
 ) -> Result<Inspection, VisionError> {
     let _ = opts;
-    match inspect_side_runs(recipe, plane, info.clone(), full_scale, false) {
-        Err(e @ (VisionError::NoHousing(_) | VisionError::NoPins { .. })) => {
-            inspect_side_runs(recipe, plane, info, full_scale, true).map_err(|_| e)
+    let least = super::envelope::CONTRAST.0 as f32;
+    let attempts = [(false, 0.0), (true, 0.0), (false, least)].map(|(s, d)| Attempt {
+        smooth_runs: s,
+        min_depth: d,
+    });
+    let mut first_err = None;
+    for a in attempts {
+        match inspect_side_runs(recipe, plane, info.clone(), full_scale, a) {
+            Err(e) if housing_not_read(&e) => {
+                first_err.get_or_insert(e);
+            }
+            r => return r,
         }
-        r => r,
+    }
+    Err(first_err.expect("at least one attempt"))
+}
+
+/// The start of the error for a housing edge steeper than a side view's.
+const TILTED_EDGE: &str = "housing edge tilted";
+
+/// Whether an attempt failed on the housing (none, no pin on it, or an
+/// edge too steep), which another attempt may read; a row of pins that
+/// does not fit the recipe is a judgement, not a failure to read.
+fn housing_not_read(e: &VisionError) -> bool {
+    match e {
+        VisionError::NoHousing(_) | VisionError::NoPins { .. } => true,
+        VisionError::WrongPart { msg, .. } => msg.starts_with(TILTED_EDGE),
+        _ => false,
     }
 }
 
-/// [`inspect_side`] with the housing edge's runs read on the raw coarse
-/// image or (`smooth_runs`) on its 3 × 3 box mean.
+/// One [`Attempt`] at a side view.
 fn inspect_side_runs<P: Px>(
     recipe: &Recipe,
     plane: &Plane<P>,
     info: ImageInfo,
     full_scale: f32,
-    smooth_runs: bool,
+    attempt: Attempt,
 ) -> Result<Inspection, VisionError> {
+    let Attempt {
+        smooth_runs,
+        min_depth,
+    } = attempt;
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
     // Silhouette is bright in `sign` space.
@@ -111,7 +160,7 @@ fn inspect_side_runs<P: Px>(
     // backlight (share of it).
     let (t, depth) = if sign < 0.0 {
         let widest = pin_px_prior.map_or(3, |p| (p / k as f64) as usize);
-        backlight::silhouette_threshold_flat(plane, &mut coarse, sign, widest)
+        backlight::silhouette_threshold_flat(plane, &mut coarse, sign, widest, min_depth)
     } else {
         (detect::otsu(&coarse.data, cw, ch), None)
     };
@@ -145,7 +194,7 @@ fn inspect_side_runs<P: Px>(
         Err(Some(tilt)) => {
             return Err(VisionError::WrongPart {
                 part,
-                msg: format!("housing edge tilted {tilt:.1}°: not a side view of this part?"),
+                msg: format!("{TILTED_EDGE} {tilt:.1}°: not a side view of this part?"),
             });
         }
     };

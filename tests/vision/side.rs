@@ -108,3 +108,25 @@ fn a_part_in_a_dim_noisy_frame_is_found_where_it_stands() {
         assert!(e < 1.0, "pin {col}'s centre {e:.2} px off");
     }
 }
+
+/// Rust 1 050 098: a good 1 × 7 (housing 0.4 % of a 2268 × 1549 frame,
+/// no `mm_per_px`) under a 15 % gradient that levels off one part's span
+/// from the part. The cubic backlight left a band 13 % deep across the
+/// frame; as the frame's darkest percent it was taken for the
+/// silhouette's level, kept out of the flattening, and its edge, 70° off,
+/// made the image an error ("housing edge tilted −69.6°"). The retry that
+/// takes the silhouette at least the envelope's least contrast deep
+/// flattens the band away.
+#[test]
+fn a_small_part_under_a_levelled_gradient_is_not_a_tilted_edge() {
+    let (case, r, ins) = common::envelope_case(1_050_098);
+    assert!(case.factors.defects.is_empty(), "a good part");
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    assert_eq!(c.centre_errors.len(), 7);
+    for &(_, col, _, dx, dy) in &c.centre_errors {
+        let e = dx.hypot(dy);
+        assert!(e < 0.5, "pin {col}'s centre {e:.2} px off");
+    }
+}
