@@ -63,6 +63,7 @@ mod side_row;
 mod surround;
 pub mod synth;
 pub mod synth_envelope;
+pub mod tip_area_rule;
 pub mod tip_levels;
 pub mod top;
 mod top_candidates;

@@ -721,6 +721,13 @@ pub(crate) fn inspect_top_with<P: Px>(
         }
         pins.push(pr);
     }
+    if blurred {
+        let n =
+            super::tip_area_rule::not_proven_damaged(&mut pins, [ta_lo, ta_hi], tol.position_mm);
+        if n > 0 {
+            warnings.push(format!("{n} tip(s) read beyond tip_area by less than the spread of this part's blurred tip areas: not proven damaged"));
+        }
+    }
 
     // Housing in the part frame (or the grid's extent as a stand-in).
     let housing = outline.rect(&sim).map(|(corners_px, extent_mm)| Housing {
