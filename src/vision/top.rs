@@ -28,6 +28,7 @@ use super::top_candidates::{
     measure_candidates, use_blobs_at,
 };
 use super::top_first_fit::FitPoints;
+use super::top_not_proven;
 use super::top_outline::{FEW_PINS, Outline, chosen_note};
 
 /// Inspects one top-view image.
@@ -722,11 +723,12 @@ pub(crate) fn inspect_top_with<P: Px>(
         pins.push(pr);
     }
     if blurred {
-        let n =
-            super::tip_area_rule::not_proven_damaged(&mut pins, [ta_lo, ta_hi], tol.position_mm);
-        if n > 0 {
-            warnings.push(format!("{n} tip(s) read beyond tip_area by less than the spread of this part's blurred tip areas: not proven damaged"));
-        }
+        let u: Vec<Option<f64>> = pos_cand
+            .iter()
+            .map(|c| c.map(|ci| top_not_proven::centre_sigma_px(&cands[ci].m, pin_px) * mm_per_px))
+            .collect();
+        let notes = top_not_proven::judge(&mut pins, [ta_lo, ta_hi], tol.position_mm, &u);
+        warnings.extend(notes);
     }
 
     // Housing in the part frame (or the grid's extent as a stand-in).
