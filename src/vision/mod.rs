@@ -59,6 +59,7 @@ pub mod side;
 mod side_bar;
 mod side_edge;
 mod side_end;
+mod side_place;
 mod side_row;
 mod surround;
 pub mod synth;
