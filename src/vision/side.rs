@@ -27,8 +27,8 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::side_bar::{BarEnd, BarWindow, RowRef, look_again, measure_bar};
 use super::side_edge::{
-    BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, level_edge_line, run_tops,
-    solid_block,
+    BarMask, body_x_range, clear_step, drop_steep_tops, edge_profile, housing_ends_u,
+    level_edge_line, run_tops, solid_block,
 };
 use super::side_end::{EndAt, row_end_offset};
 use super::side_place::place_row;
@@ -440,7 +440,10 @@ fn inspect_side_runs<P: Px>(
         None => {
             let us: Vec<f64> = bars.iter().map(|b| b.u_px).collect();
             let ws: Vec<f64> = bars.iter().map(|b| b.width_px).collect();
-            let r = place_row(recipe, &us, &ws, fixed_s, (u_h0, u_h1), &mut warnings)?;
+            let reach = 4.0 * kf + 8.0;
+            let h = housing_ends_u(plane, sign, &line, (cs, sn), (hx0, hx1), reach);
+            let h = h.0.zip(h.1);
+            let r = place_row(recipe, &us, &ws, fixed_s, (u_h0, u_h1), h, &mut warnings)?;
             (r.a_u, r.s, r.inliers, r.rms, r.ambiguous, r.pitch_px)
         }
     };

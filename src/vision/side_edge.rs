@@ -323,6 +323,60 @@ impl BarMask {
     }
 }
 
+/// The housing block's two ends along the row, sub-pixel: the along-row
+/// coordinates u = cs·x + sn·y (px) of the half-level crossings of row
+/// profiles taken just below the top edge `line`, across each coarse end
+/// `x_ends` (full-resolution px) ± `reach` px, the median over up to 16
+/// rows 2–17 px below the edge; `None` for an end whose profiles leave
+/// the frame or cross in fewer than 5 rows. A side perpendicular to the
+/// edge gives the same u on every row. Only what stands below the edge
+/// (the block and the backlight beside it) is read: no pin reaches there.
+pub(super) fn housing_ends_u<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    line: &super::fit::Line,
+    (cs, sn): (f64, f64),
+    x_ends: (f64, f64),
+    reach: f64,
+) -> (Option<f64>, Option<f64>) {
+    let step = 0.5;
+    let n = (2.0 * reach / step) as usize + 1;
+    let (xmax, ymax) = ((plane.w - 1) as f64, (plane.h - 1) as f64);
+    // `dir` +1: outside on the left (the block's left end), −1: right end.
+    let end_u = |x_end: f64, dir: f64| -> Option<f64> {
+        let x_out = x_end - dir * reach;
+        let x_in = x_end + dir * reach;
+        if x_out.min(x_in) < 0.0 || x_out.max(x_in) > xmax {
+            return None;
+        }
+        let mut us = Vec::new();
+        for d in 2..18 {
+            let y = line.y_at(x_end) + d as f64;
+            if y > ymax {
+                break;
+            }
+            // Outside → inside: the silhouette rises (sign space).
+            let prof: Vec<f32> = (0..n)
+                .map(|i| sign * plane.bilinear(x_out + dir * i as f64 * step, y))
+                .collect();
+            let lo = super::side_row::median_f32(&mut prof[..4].to_vec());
+            let hi = super::side_row::median_f32(&mut prof[n - 4..].to_vec());
+            if !(hi > lo) {
+                continue;
+            }
+            if let Some(f) = super::side_row::step_rise(&prof, 0.5 * (lo + hi)) {
+                let x = x_out + dir * f * step;
+                us.push(cs * x + sn * y);
+            }
+        }
+        if us.len() < 5 {
+            return None;
+        }
+        super::grid::median(&mut us)
+    };
+    (end_u(x_ends.0, 1.0), end_u(x_ends.1, -1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -494,5 +548,36 @@ mod tests {
         assert!((cross(&one) - 11.5).abs() < 0.6, "{}", cross(&one));
         let mean = edge_profile(&plane, -1.0, 4, (0, 39), 4, 0.0);
         assert!((cross(&mean) - 19.5).abs() < 0.01, "{}", cross(&mean));
+    }
+
+    /// A dark block (silhouette 60 on a backlight of 200) from x = 40.3 to
+    /// x = 160.7 (pixel i spans i ± 0.5; boundary pixels area-weighted), its
+    /// top edge y = 49.5: each end within 0.15 px (an unblurred step read
+    /// by linear interpolation), their centre within 0.02 px; `None` where
+    /// the reach leaves the frame.
+    #[test]
+    fn the_housing_blocks_ends_are_read_to_a_fraction_of_a_pixel() {
+        use super::super::fit::Line;
+        use super::super::gray::Plane;
+        let (w, h) = (200usize, 100usize);
+        let (x0, x1) = (40.3f32, 160.7f32);
+        let mut d = vec![200u16 * 64; w * h];
+        for y in 50..h {
+            for x in 0..w {
+                let cover = ((x as f32 + 0.5).min(x1) - (x as f32 - 0.5).max(x0)).clamp(0.0, 1.0);
+                d[y * w + x] = ((200.0 - 140.0 * cover) * 64.0).round() as u16;
+            }
+        }
+        let plane = Plane { w, h, data: &d[..] };
+        let line = Line { a: 49.5, b: 0.0 };
+        let (l, r) = housing_ends_u(&plane, -1.0, &line, (1.0, 0.0), (42.0, 158.0), 10.0);
+        let (l, r) = (l.unwrap(), r.unwrap());
+        assert!(
+            (l - 40.3).abs() < 0.15 && (r - 160.7).abs() < 0.15,
+            "{l} {r}"
+        );
+        assert!((0.5 * (l + r) - 100.5).abs() < 0.02, "{l} {r}");
+        let (l, _) = housing_ends_u(&plane, -1.0, &line, (1.0, 0.0), (5.0, 158.0), 10.0);
+        assert_eq!(l, None);
     }
 }

@@ -10,6 +10,10 @@ use super::grid;
 use super::recipe::Recipe;
 use super::side_row::{refine_pitch, robust_offset_scale, row_fits_lattice};
 
+/// Up to this many pins on the row, at the recipe's scale, the housing
+/// block's centre places it (their own offset follows one pin's bend).
+const FEW_PINS: usize = 3;
+
 /// Where the row stands: the along-row offset `a_u` (px) of the part
 /// frame's origin, the scale `s` (px/mm), the fit's inliers and RMS (px),
 /// whether the housing decided the window, and the pitch (px).
@@ -24,13 +28,16 @@ pub(super) struct RowPlacement {
 
 /// Places the row of bars at along-row coordinates `bars_u` (px, widths
 /// `bars_w`) on the recipe's columns; `fixed_s` is the recipe's scale
-/// (px/mm), `(u_h0, u_h1)` the housing block's ends along the row (px).
+/// (px/mm), `(u_h0, u_h1)` the housing block's coarse ends along the row
+/// (px) and `housing_u` the same measured at full resolution, when both
+/// are.
 pub(super) fn place_row(
     recipe: &Recipe,
     bars_u: &[f64],
     bars_w: &[f64],
     fixed_s: Option<f64>,
     (u_h0, u_h1): (f64, f64),
+    housing_u: Option<(f64, f64)>,
     warnings: &mut Vec<String>,
 ) -> Result<RowPlacement, VisionError> {
     let part = recipe.part_number.clone();
@@ -144,11 +151,35 @@ pub(super) fn place_row(
     // One pin on the grid and no mm_per_px: the scale from the pitch
     // estimate (which then came from the pin's width).
     let fit_s = fixed_s.or((nn.len() < 2).then_some(pitch_px / pitch_mm));
-    let (a_u, s, inl, rms) =
+    let (mut a_u, s, inl, mut rms) =
         robust_offset_scale(&nn, &uu, fit_s, 0.1).ok_or_else(|| VisionError::NoPins {
             part: part.clone(),
             msg: "cannot fit the pin row (need two pins to estimate mm_per_px)".into(),
         })?;
+    // Two or three pins at the recipe's scale: their offset follows any
+    // one pin's bend (a 1 × 2 splits it in halves, each inside the
+    // tolerance: Rust 1 050 910, 1 050 378, 920 533, 1 000 591); the
+    // housing block, centred on the pin field, places the row instead
+    // where its two ends are measured and agree with the pins within a
+    // quarter pitch.
+    if let (Some(_), Some((l, r))) = (fixed_s, housing_u)
+        && (2..=FEW_PINS).contains(&nn.len())
+    {
+        let a_h = 0.5 * (l + r);
+        if (a_h - a_u).abs() <= 0.25 * pitch_px {
+            a_u = a_h;
+            let ss: f64 = nn
+                .iter()
+                .zip(&uu)
+                .map(|(n, u)| (u - a_u - s * n).powi(2))
+                .sum();
+            rms = (ss / nn.len() as f64).sqrt();
+            warnings.push(format!(
+                "{} pins: the row placed on the housing block's centre (its ends measured at full resolution)",
+                nn.len()
+            ));
+        }
+    }
     Ok(RowPlacement {
         a_u,
         s,

@@ -130,3 +130,33 @@ fn a_small_part_under_a_levelled_gradient_is_not_a_tilted_edge() {
         assert!(e < 0.5, "pin {col}'s centre {e:.2} px off");
     }
 }
+
+/// Rust 1 050 910 (held-out 1 050 000, read after its measurement): a
+/// 1 × 2 at the recipe's scale whose pin 1 is bent along the row by
+/// 5.3 px. The two pins' own offset split the bend into two halves, each
+/// inside the 4 px tolerance, and the part passed. With two or three pins
+/// the housing block's centre (its ends measured at full resolution just
+/// below the top edge) places the row (`side_place`), and the bend shows
+/// whole on the bent pin.
+#[test]
+fn a_bent_pin_of_two_is_seen_against_the_housing_block() {
+    let (case, r, ins) = common::envelope_case(1_050_910);
+    assert_eq!(case.factors.defects, vec!["bent".to_string()]);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    assert!(
+        ins.warnings
+            .iter()
+            .any(|w| w.contains("housing block's centre")),
+        "{:?}",
+        ins.warnings
+    );
+    // The good pin's centre stays where it stands.
+    for &(_, col, status, dx, dy) in &c.centre_errors {
+        if status == pinsight::vision::PinStatus::Ok {
+            let e = dx.hypot(dy);
+            assert!(e < 0.5, "pin {col}'s centre {e:.2} px off");
+        }
+    }
+}
