@@ -100,16 +100,18 @@ pub fn inspect_side<P: Px>(
         smooth_runs: s,
         min_depth: d,
     });
-    let mut first_err = None;
-    for a in attempts {
+    let [first, rest @ ..] = attempts;
+    let first_err = match inspect_side_runs(recipe, plane, info.clone(), full_scale, first) {
+        Err(e) if housing_not_read(&e) => e,
+        r => return r,
+    };
+    for a in rest {
         match inspect_side_runs(recipe, plane, info.clone(), full_scale, a) {
-            Err(e) if housing_not_read(&e) => {
-                first_err.get_or_insert(e);
-            }
+            Err(e) if housing_not_read(&e) => {}
             r => return r,
         }
     }
-    Err(first_err.expect("at least one attempt"))
+    Err(first_err)
 }
 
 /// The start of the error for a housing edge steeper than a side view's.
