@@ -55,7 +55,7 @@ pub(crate) const MIN_TIPS_FOR_SPREAD: usize = 5;
 /// Largest share of `position_mm` a centre's uncertainty may reach and
 /// still forgive an offset past the tolerance: beyond it the gauge cannot
 /// judge the pin, and its reading stands.
-pub(crate) const MAX_SCATTER_OF_TOL: f64 = 0.25;
+pub(crate) const MAX_UNCERTAINTY_OF_TOL: f64 = 0.25;
 
 /// The spread of a part's tip-area ratios: the median absolute deviation
 /// from their median, as a normal σ (× 1.4826), robust to the damaged
@@ -153,7 +153,7 @@ pub(crate) fn centre_sigma_px(m: &BlobMeasure, pin_px: f64) -> f64 {
 /// centre's standard uncertainty (`centre_sigma_mm`, per pin:
 /// [`CENTRE_EFFICIENCY`] × [`centre_bound_px`] at the image's scale) are
 /// not proven bent: each becomes ok, and its reason says why. An
-/// uncertainty over [`MAX_SCATTER_OF_TOL`] of the tolerance forgives
+/// uncertainty over [`MAX_UNCERTAINTY_OF_TOL`] of the tolerance forgives
 /// nothing (the gauge cannot judge that pin; its reading stands). Returns
 /// how many were changed.
 ///
@@ -174,7 +174,7 @@ pub(crate) fn not_proven_bent(
         };
         let beyond = off - position_mm;
         if p.status != PinStatus::Bent
-            || !(beyond > 0.0 && beyond <= u && u <= MAX_SCATTER_OF_TOL * position_mm)
+            || !(beyond > 0.0 && beyond <= u && u <= MAX_UNCERTAINTY_OF_TOL * position_mm)
         {
             continue;
         }
