@@ -66,17 +66,29 @@ impl<P: Px> Leftovers<'_, P> {
     /// half a tip width and 2.5 edge σ) over discs a fifth of a tip wide,
     /// with sides within 0.75 tip widths of a tip unread.
     fn ridge_through(&self, m: &measure::BlobMeasure, tb: (f32, f32)) -> Option<f64> {
+        self.ridge_at((m.x, m.y), m.area_px, m.edge_sigma, tb)
+    }
+
+    /// [`Self::ridge_through`] for a blob of `area_px` pixels at `c` whose
+    /// edges spread by `edge_sigma`.
+    fn ridge_at(
+        &self,
+        c: (f64, f64),
+        area_px: f64,
+        edge_sigma: f64,
+        tb: (f32, f32),
+    ) -> Option<f64> {
         let pin_px = self.pin_px();
-        let reach = (1.3 * (m.area_px / std::f64::consts::PI).sqrt()
+        let reach = (1.3 * (area_px / std::f64::consts::PI).sqrt()
             + 0.5 * pin_px
-            + 2.5 * m.edge_sigma.clamp(0.3, 3.0))
+            + 2.5 * edge_sigma.clamp(0.3, 3.0))
         .max(pin_px);
         let probe = Probe {
             reach,
             r_disc: (0.2 * pin_px).max(1.0),
             clear: 0.75 * pin_px,
         };
-        ridge_level(self.plane, self.sign, (m.x, m.y), probe, tb, &self.tips())
+        ridge_level(self.plane, self.sign, c, probe, tb, &self.tips())
     }
 
     /// Whether a protrusion lies within the distance rule of the housing and
@@ -378,10 +390,39 @@ fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut 
         else {
             continue;
         };
+        if lo.sign < 0.0 && on_dark_band(lo, &sh, (t, b), core_px) {
+            continue;
+        }
         if far(sh.x, sh.y) && sh.rise >= FIXTURE_SIGMAS * sh.noise && lo.within_rule(rule, &sh) {
             extras.push(shoulder_result(lo, rule, &sh, rise, level, ON_FIXTURE));
         }
     }
+}
+
+/// Whether a protrusion the fixture pass found on a dark part is a piece of
+/// the housing's chamfer band: its core does not stand `MIN_LOCAL_CONTRAST`
+/// beyond `CORE_SIGMAS` σ above the straight ridge through it
+/// ([`Leftovers::ridge_at`]), the test a candidate blob already passes.
+/// The chamfer band, darker than the housing, is a ridge in sign space
+/// narrower than the fixture pass's opening, so the opening leaves it in
+/// the residual whole; where JPEG blocks and noise make one stretch of it
+/// darker, the half-level mask holds that stretch alone, clear of the
+/// window, and it was counted (Rust 1 080 683: two "extras" of 3.5 and 5
+/// tips along a 3 × 18's lower edge, JPEG 79, contrast 0.43, their cores
+/// 0.03–0.08 of the tip contrast above the band). Debris, as dark as a
+/// tip's rim, stands far above a band it lies on.
+fn on_dark_band<P: Px>(
+    lo: &Leftovers<'_, P>,
+    sh: &Shoulder,
+    (t, b): (f32, f32),
+    core_px: f64,
+) -> bool {
+    let core = contrast_ratio(sh.base + sh.core, t, b);
+    let core_sd = core_sigma(sh.noise, core_px, t, b);
+    // The shoulder's edge spread is not measured; a pixel's worth is the
+    // envelope's middle and only sets how far out the ridge is read.
+    lo.ridge_at((sh.x, sh.y), sh.area_px, 1.0, (t, b))
+        .is_some_and(|r| core - CORE_SIGMAS * core_sd - r < MIN_LOCAL_CONTRAST)
 }
 
 /// A blob set aside as part of, or a ripple of, a brighter structure,

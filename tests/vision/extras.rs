@@ -154,3 +154,30 @@ fn debris_on_a_bright_fixture_below_half_the_tip_level_is_found() {
     assert_eq!(found, 1, "{what:?}");
     assert!(ok);
 }
+
+/// A dark 3 × 18 under a 20 % gradient and JPEG 79 (Rust 1 080 683, held
+/// out 2026-12-06, contrast 0.43, 6.2 px tips): the fixture pass found two
+/// stretches of the chamfer band along the housing's lower edge, darker
+/// there where JPEG blocks and noise fell together, and counted them as
+/// debris of 3.5 and 5 tips. A straight line along the band reads, beyond
+/// their reach, within 0.03–0.08 of the tip contrast of their cores: a
+/// band, as `a_clump_of_a_band_or_of_a_bright_fixture_is_no_debris` finds
+/// for candidate blobs, and now for the fixture pass's protrusions too.
+#[test]
+fn a_stretch_of_a_dark_parts_chamfer_band_is_no_fixture_debris() {
+    let (ok, found, truth, what) = judge(1_080_683);
+    assert_eq!(truth, 0, "the generator drew no debris");
+    assert_eq!(found, 0, "spurious debris: {what:?}");
+    assert!(ok);
+}
+
+/// Debris under heavy noise on a bright 2 × 15 (Rust 931 319: σ 14.1 DN,
+/// 7.6 px tips, vignetting 0.47): on the coarse top-hat it peaks at 0.55
+/// of the tip contrast, under the noise floor (0.74 of it), which set the
+/// threshold, so neither the coarse search nor the faint pass offered it.
+/// Over the wider box (`top_faint::noisy_debris_blobs`) it stands clear of
+/// the noise, and the extras' tests count it.
+#[test]
+fn debris_under_heavy_noise_is_found() {
+    one_extra_where_the_generator_drew_it(&[931_319]);
+}
