@@ -307,27 +307,11 @@ pub fn search_coarse_smoothed(
     let tip_contrast = super::grid::median(&mut peaks)
         .map(|v| v as f32)
         .unwrap_or_else(|| tophat.iter().cloned().fold(0f32, f32::max));
-    // Noise floor: robust spread of the top-hat (mostly background).
-    let mut sample = noise_sample(&coarse.data, &tophat);
-    let mid = sample.len() / 2;
-    let med = if sample.is_empty() {
-        0.0
-    } else {
-        *sample.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
-    };
-    let mut dev: Vec<f32> = sample.iter().map(|v| (v - med).abs()).collect();
-    let mad = if dev.is_empty() {
-        0.0
-    } else {
-        let m = dev.len() / 2;
-        *dev.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
-    };
     let sigmas = match smoothing {
         Smoothing::FaintLowFloor => LOW_FLOOR_SIGMAS,
         _ => NOISE_FLOOR_SIGMAS,
     };
-    // Never below the quantisation's terraces (see [`QUANTUM_FLOOR_STEPS`]).
-    let noise_floor = (med + sigmas * 1.4826 * mad).max(QUANTUM_FLOOR_STEPS * coarse.quantum);
+    let noise_floor = tophat_noise_floor(coarse, &tophat, sigmas);
     let threshold = (0.35 * tip_contrast).max(noise_floor);
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
     let blobs = split_blobs(&lab, &tophat, w, threshold, &too_big)
@@ -345,6 +329,28 @@ pub fn search_coarse_smoothed(
         noise_floor,
         blobs,
     }
+}
+
+/// The noise floor of `tophat` (a top-hat of `coarse`): the median of its
+/// [`noise_sample`] (mostly background) plus `sigmas` robust σ (1.4826 ×
+/// the median absolute deviation), never below the quantisation's terraces
+/// ([`QUANTUM_FLOOR_STEPS`]).
+pub fn tophat_noise_floor(coarse: &Coarse, tophat: &[f32], sigmas: f32) -> f32 {
+    let mut sample = noise_sample(&coarse.data, tophat);
+    let mid = sample.len() / 2;
+    let med = if sample.is_empty() {
+        0.0
+    } else {
+        *sample.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
+    };
+    let mut dev: Vec<f32> = sample.iter().map(|v| (v - med).abs()).collect();
+    let mad = if dev.is_empty() {
+        0.0
+    } else {
+        let m = dev.len() / 2;
+        *dev.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
+    };
+    (med + sigmas * 1.4826 * mad).max(QUANTUM_FLOOR_STEPS * coarse.quantum)
 }
 
 /// Every 7th top-hat value, the sample the noise floor is read from;

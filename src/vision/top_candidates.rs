@@ -88,7 +88,8 @@ pub(super) fn add_faint_debris<P: Px>(
     cands: &mut Vec<Candidate>,
     used: &mut Vec<bool>,
 ) {
-    let faint = super::top_faint::faint_blobs(cs, pin_px);
+    let mut faint = super::top_faint::faint_blobs(cs, pin_px);
+    faint.extend(super::top_faint::noisy_debris_blobs(cs, pin_px));
     for (m, roi, seed) in measure_blobs(plane, sign, cs, &faint, pin_px, opts) {
         if cands
             .iter()

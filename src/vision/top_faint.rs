@@ -8,7 +8,7 @@
 //! around it (texture fills that annulus with bumps as high as itself; a
 //! particle on a plain housing or fixture has only noise there).
 
-use super::detect::{CoarseBlob, CoarseSearch};
+use super::detect::{self, CoarseBlob, CoarseSearch, Smoothing};
 use super::label;
 
 /// The faint pass's level, as a fraction of the typical tip contrast.
@@ -91,6 +91,61 @@ pub(super) fn faint_blobs(cs: &CoarseSearch, pin_px: f64) -> Vec<CoarseBlob> {
         let p95 = *ring.select_nth_unstable_by(q, |a, b| a.total_cmp(b)).1;
         if peak < FAINT_ISOLATION * p95.max(0.0) {
             continue;
+        }
+        let mut blob = b.clone();
+        blob.runs = Vec::new();
+        out.push(CoarseBlob { blob, peak });
+    }
+    out
+}
+
+/// Coarse blobs of the wider smoothing box's top-hat ([`Smoothing::Faint`],
+/// about four fifths of a tip) above its own noise floor
+/// ([`detect::NOISE_FLOOR_SIGMAS`] σ), tip-sized or smaller, that the
+/// coarse search did not find: debris under heavy noise. Only where the
+/// noise floor, not a fraction of the tip contrast, set the coarse
+/// threshold; there [`faint_blobs`] has no level between the two to search.
+/// A particle at a tip's rim level, half a tip to a tip in area, peaks at
+/// 0.44–0.55 of the tip contrast on the coarse top-hat of a small-tip image
+/// under σ 10–14 DN, while the noise floor stands at 0.48–0.74 of it (Rust
+/// 920 475, 931 319): the box of half a tip (none at all for tips under
+/// 8 coarse px) leaves the pixel noise almost whole. Over four fifths of a
+/// tip the noise falls by the box's width again and the particle keeps
+/// most of its peak. What a blob found here is, the extras' own tests
+/// decide (its level against the tips', its contrast summed over its
+/// pixels, its core against its own noise).
+pub(super) fn noisy_debris_blobs(cs: &CoarseSearch, pin_px: f64) -> Vec<CoarseBlob> {
+    let (w, h) = (cs.coarse.w, cs.coarse.h);
+    if cs.noise_floor < cs.threshold || cs.coarse.data.len() != w * h || w < 3 || h < 3 {
+        return Vec::new();
+    }
+    let (th, _) = detect::tophat(&cs.coarse, pin_px, Smoothing::Faint);
+    let floor = detect::tophat_noise_floor(&cs.coarse, &th, detect::NOISE_FLOOR_SIGMAS);
+    let pin_c = pin_px / cs.coarse.k as f64;
+    let tip_area_c = pin_c * pin_c;
+    let lab = label::label(w, h, |x, y| th[y * w + x] > floor);
+    let mut out = Vec::new();
+    for b in &lab.blobs {
+        let a = b.area as f64 / tip_area_c;
+        if !(0.08..=3.0).contains(&a) {
+            continue;
+        }
+        let found = cs.blobs.iter().any(|c| {
+            let (x, y) = (c.blob.cx, c.blob.cy);
+            x >= b.x_min as f64 - 0.5
+                && x <= b.x_max as f64 + 0.5
+                && y >= b.y_min as f64 - 0.5
+                && y <= b.y_max as f64 + 0.5
+        });
+        if found {
+            continue;
+        }
+        let mut peak = f32::NEG_INFINITY;
+        for &ri in &b.runs {
+            let r = &lab.runs[ri as usize];
+            for x in r.x0..r.x1 {
+                peak = peak.max(th[r.y as usize * w + x as usize]);
+            }
         }
         let mut blob = b.clone();
         blob.runs = Vec::new();
@@ -216,6 +271,56 @@ mod tests {
         });
         assert_eq!((faint.len(), near.count()), (1, 1), "{faint:?}");
     }
+
+    /// Under heavy pixel noise the coarse threshold is the noise floor, and
+    /// a tip-sized particle at 0.4 of the tips' peak stays under it (and
+    /// the faint pass, whose level would lie above that threshold, has
+    /// nothing to search); over the wider box the noise falls and the
+    /// particle stands clear: found there, where it lies, and nothing
+    /// else in the frame is.
+    #[test]
+    fn a_particle_under_heavy_noise_is_found_over_the_wider_box() {
+        let (w, h) = (200usize, 160usize);
+        let mut img = vec![0u16; w * h];
+        let mut noisy = vec![0f64; w * h];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for v in noisy.iter_mut() {
+            // Box–Muller, σ = NOISE.
+            let (u1, u2) = (uniform().max(1e-12), uniform());
+            *v = 4000.0 + NOISE * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+        }
+        for (o, v) in img.iter_mut().zip(&noisy) {
+            *o = v.round().clamp(0.0, 65535.0) as u16;
+        }
+        for i in 0..4 {
+            tip(&mut img, w, 45.0 + 35.0 * i as f64, 50.0);
+        }
+        disc(&mut img, w, 100.0, 110.0, 5.5, 400);
+        let plane = Plane {
+            w,
+            h,
+            data: &img[..],
+        };
+        let cs = detect::coarse_search(&plane, 1.0, 10.0, None, Some(4));
+        let found = noisy_debris_blobs(&cs, 10.0);
+        assert_eq!(cs.threshold, cs.noise_floor, "the noise sets the threshold");
+        assert_eq!(cs.blobs.len(), 4, "the coarse search keeps the tips only");
+        assert!(faint_blobs(&cs, 10.0).is_empty());
+        let near = found.iter().filter(|b| {
+            let (x, y) = cs.coarse.to_full(b.blob.cx, b.blob.cy);
+            (x - 100.0).hypot(y - 110.0) < 2.0
+        });
+        assert_eq!((found.len(), near.count()), (1, 1), "{found:?}");
+    }
+
+    /// Pixel noise σ of [`a_particle_under_heavy_noise_is_found_over_the_wider_box`].
+    const NOISE: f64 = 450.0;
 
     /// The particle's height over the housing (the tips' peak is 1000).
     const PARTICLE: u16 = 900;
