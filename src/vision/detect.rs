@@ -523,7 +523,7 @@ fn split_into(
     }
 }
 
-fn blob_peak(lab: &label::Labelling, b: &Blob, values: &[f32], w: usize) -> f32 {
+pub(crate) fn blob_peak(lab: &label::Labelling, b: &Blob, values: &[f32], w: usize) -> f32 {
     let mut p = f32::NEG_INFINITY;
     for &ri in &b.runs {
         let r = lab.runs[ri as usize];

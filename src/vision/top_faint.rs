@@ -40,26 +40,13 @@ pub(super) fn faint_blobs(cs: &CoarseSearch, pin_px: f64) -> Vec<CoarseBlob> {
         if !(0.08..=3.0).contains(&a) {
             continue;
         }
-        let mut peak = f32::NEG_INFINITY;
-        for &ri in &b.runs {
-            let r = &lab.runs[ri as usize];
-            for x in r.x0..r.x1 {
-                peak = peak.max(th[r.y as usize * w + x as usize]);
-            }
-        }
+        let peak = detect::blob_peak(&lab, b, th, w);
         // Above the threshold the coarse search has it already, unless
         // too little of it stood above that threshold to count there
         // (under 0.08 tips: Rust 980 637, debris at the tips' rim level
         // on a brighter fixture peaks at 0.38 of the domed tips' contrast,
         // one coarse pixel over the threshold of 0.35).
-        let kept = |c: &CoarseBlob| {
-            let (x, y) = (c.blob.cx, c.blob.cy);
-            x >= b.x_min as f64 - 0.5
-                && x <= b.x_max as f64 + 0.5
-                && y >= b.y_min as f64 - 0.5
-                && y <= b.y_max as f64 + 0.5
-        };
-        if peak >= cs.threshold && cs.blobs.iter().any(kept) {
+        if peak >= cs.threshold && holds_a_coarse_blob(cs, b) {
             continue;
         }
         let half_diag = 0.5 * (b.width() as f64).hypot(b.height() as f64);
@@ -99,6 +86,18 @@ pub(super) fn faint_blobs(cs: &CoarseSearch, pin_px: f64) -> Vec<CoarseBlob> {
     out
 }
 
+/// Whether blob `b`'s bounding box (grown by half a coarse pixel) holds the
+/// centre of a blob the coarse search kept: the same structure, found.
+fn holds_a_coarse_blob(cs: &CoarseSearch, b: &label::Blob) -> bool {
+    cs.blobs.iter().any(|c| {
+        let (x, y) = (c.blob.cx, c.blob.cy);
+        x >= b.x_min as f64 - 0.5
+            && x <= b.x_max as f64 + 0.5
+            && y >= b.y_min as f64 - 0.5
+            && y <= b.y_max as f64 + 0.5
+    })
+}
+
 /// Coarse blobs of the wider smoothing box's top-hat ([`Smoothing::Faint`],
 /// about four fifths of a tip) above its own noise floor
 /// ([`detect::NOISE_FLOOR_SIGMAS`] σ), tip-sized or smaller, that the
@@ -130,23 +129,10 @@ pub(super) fn noisy_debris_blobs(cs: &CoarseSearch, pin_px: f64) -> Vec<CoarseBl
         if !(0.08..=3.0).contains(&a) {
             continue;
         }
-        let found = cs.blobs.iter().any(|c| {
-            let (x, y) = (c.blob.cx, c.blob.cy);
-            x >= b.x_min as f64 - 0.5
-                && x <= b.x_max as f64 + 0.5
-                && y >= b.y_min as f64 - 0.5
-                && y <= b.y_max as f64 + 0.5
-        });
-        if found {
+        if holds_a_coarse_blob(cs, b) {
             continue;
         }
-        let mut peak = f32::NEG_INFINITY;
-        for &ri in &b.runs {
-            let r = &lab.runs[ri as usize];
-            for x in r.x0..r.x1 {
-                peak = peak.max(th[r.y as usize * w + x as usize]);
-            }
-        }
+        let peak = detect::blob_peak(&lab, b, &th, w);
         let mut blob = b.clone();
         blob.runs = Vec::new();
         out.push(CoarseBlob { blob, peak });
