@@ -104,10 +104,10 @@ pub fn notes(ins: &super::Inspection) -> Vec<String> {
 /// the grid stands on a few tips (or on noise) at a scale where the others
 /// fall between positions. The inspection cannot tell the two apart, so
 /// the verdict is given with the doubt written beside it. Measured on the
-/// randomised envelope: every good part read with most of its pins missing
-/// had an estimated scale 1.1–2.5 × off and 2–4 fit inliers (Rust 910 530,
-/// 960 439, 980 608, 1 090 335); no part the generator draws has lost half
-/// its pins (three defects at most).
+/// randomised envelope: the good parts read with most of their pins missing
+/// had an estimated scale 1.8–2.5 × off and 2–4 fit inliers (Rust 910 530,
+/// 960 439, 1 090 335); a part the generator draws loses at most three
+/// pins, so of its parts only small ones can truly have lost half.
 fn doubtful_scale(ins: &super::Inspection) -> Option<String> {
     let n = ins.pins.len();
     let found = ins
@@ -157,7 +157,7 @@ mod tests {
 
     /// The envelope case of a good 2 × 10 whose estimated scale came out
     /// 2.5 × too fine (Rust 1 090 335: contrast 0.34, vignetting 0.48, JPEG
-    /// 75): 18 of its 20 pins read missing, and the report says why the
+    /// 75): 15 of its 20 pins read missing, and the report says why the
     /// verdict is in doubt. A case read at its true scale has no such note.
     #[test]
     fn a_part_read_mostly_missing_at_an_estimated_scale_is_noted() {
