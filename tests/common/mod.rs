@@ -203,3 +203,13 @@ pub fn envelope_verdict_right(seed: u64) -> (pinsight::vision::Inspection, usize
     );
     (ins, c.status_mismatches.len())
 }
+
+/// Asserts that the inspection's notes (its `warnings`) hold one containing
+/// `needle`: the report says what the inspection did or doubts.
+pub fn assert_note(ins: &pinsight::vision::Inspection, needle: &str) {
+    assert!(
+        ins.warnings.iter().any(|w| w.contains(needle)),
+        "no note containing {needle:?}: {:?}",
+        ins.warnings
+    );
+}

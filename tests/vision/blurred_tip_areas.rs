@@ -53,13 +53,7 @@ fn a_blurred_tip_just_past_the_area_limit_is_not_proven_damaged() {
     assert!(a > 1.5 && a < 1.65, "tip (0, 0) reads {a:.3}");
     let why = p.reason.as_deref().unwrap_or_default();
     assert!(why.contains("not proven damaged"), "{why}");
-    assert!(
-        ins.warnings
-            .iter()
-            .any(|w| w.contains("not proven damaged")),
-        "{:?}",
-        ins.warnings
-    );
+    common::assert_note(&ins, "not proven damaged");
 }
 
 /// Rust 900 456 (tuning set 900 000): a good dark 4 × 20, 6.3 px tips

@@ -55,11 +55,5 @@ fn a_short_rows_bent_end_pin_is_judged_from_the_housing_beside_its_mark() {
     let c = r.compare(&case.factors, &ins);
     assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
     assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
-    assert!(
-        ins.warnings
-            .iter()
-            .any(|w| w.contains("taken from the housing's outline")),
-        "{:?}",
-        ins.warnings
-    );
+    common::assert_note(&ins, "taken from the housing's outline");
 }
