@@ -92,11 +92,11 @@ pub fn estimate_lattice(
     }
     let tilt = MAX_TILT_DEG.to_radians();
     let n = pts.len();
-    // Nearest neighbour along each axis direction.
-    let nearest = |horizontal: bool| -> Vec<f64> {
+    // Nearest neighbour along each axis direction: (spacing, the pair).
+    let nearest_pairs = |horizontal: bool| -> Vec<(f64, (usize, usize))> {
         let mut out = Vec::new();
         for i in 0..n {
-            let mut best = f64::INFINITY;
+            let (mut best, mut with) = (f64::INFINITY, i);
             for j in 0..n {
                 if i == j {
                     continue;
@@ -108,15 +108,19 @@ pub fn estimate_lattice(
                 } else {
                     (PI / 2.0 - ang.abs()) < tilt
                 };
-                if ok {
-                    best = best.min((dx * dx + dy * dy).sqrt());
+                let d = (dx * dx + dy * dy).sqrt();
+                if ok && d < best {
+                    (best, with) = (d, j);
                 }
             }
             if best.is_finite() {
-                out.push(best);
+                out.push((best, (i.min(with), i.max(with))));
             }
         }
         out
+    };
+    let nearest = |horizontal: bool| -> Vec<f64> {
+        nearest_pairs(horizontal).iter().map(|p| p.0).collect()
     };
     let (px, py) = match pitch_px {
         Some(p) => p,
@@ -205,12 +209,26 @@ pub fn estimate_lattice(
             }
         }
     }
+    // Still none: another part, if its pins stand at a pitch of their own.
+    // That takes two pairs of nearest neighbours at one spacing (±10 %); a
+    // single pair off the pitch is no lattice, and a bent pin makes one
+    // (Rust seed 1 100 279: a 1 × 3 with its middle pin missing and the
+    // first bent 0.18 pitch, the two left 1.82 pitches apart, and debris
+    // on the housing's corner as the third point).
     if angles.is_empty() && n >= 3 && pitch_px.is_some() {
-        let mut d = nearest(true);
-        d.extend(nearest(false));
+        let mut pairs = nearest_pairs(true);
+        pairs.extend(nearest_pairs(false));
+        let mut d: Vec<f64> = pairs.iter().map(|p| p.0).collect();
         let found = median(&mut d).unwrap_or(f64::NAN);
+        let mut at_found: Vec<(usize, usize)> = pairs
+            .iter()
+            .filter(|p| (p.0 / found - 1.0).abs() < 0.1)
+            .map(|p| p.1)
+            .collect();
+        at_found.sort_unstable();
+        at_found.dedup();
         let expected = if cols > 1 { px } else { py };
-        if found.is_finite() && (found / expected - 1.0).abs() > 0.2 {
+        if found.is_finite() && at_found.len() >= 2 && (found / expected - 1.0).abs() > 0.2 {
             return Err(LatticeError::PitchMismatch {
                 expected_px: expected,
                 found_px: found,
@@ -631,6 +649,26 @@ mod tests {
         // Nearest neighbours at 1.69 pitches: another part, still an error.
         let q = vec![at(0.0, 0.0), at(1.69, 0.0), at(3.38, 0.0)];
         assert!(estimate_lattice(&q, Some((82.3, 82.3)), 1.0, 1, 4).is_err());
+    }
+
+    #[test]
+    fn one_pair_off_the_pitch_is_no_other_part() {
+        // Rust seed 1 100 279: a 1 × 3 without its middle pin, the first
+        // pin bent 0.18 pitch toward the last (1.82 pitches apart) and a
+        // piece of debris above the last. One spacing off the pitch is a
+        // bent pin as much as another part: the lattice is returned, at
+        // the known pitch, and the inspection judges the pins on it.
+        let at = |a: f64, b: f64| (100.0 + 47.1 * a, 220.0 + 47.1 * b);
+        let p = vec![at(0.18, 0.0), at(2.0, 0.0), at(2.55, -0.55)];
+        let lat = estimate_lattice(&p, Some((47.1, 47.1)), 1.0, 1, 3).unwrap();
+        assert_eq!(lat.px, 47.1);
+        // The two pins sit two nodes apart on it, each within 0.2 pitch.
+        let (a0, b0) = lat.to_lattice(p[0]);
+        let (a1, b1) = lat.to_lattice(p[1]);
+        assert_eq!(a1.round() - a0.round(), 2.0, "{a0} {a1}");
+        for f in [a0, b0, a1, b1] {
+            assert!((f - f.round()).abs() < 0.2, "{a0} {b0} {a1} {b1}");
+        }
     }
 
     #[test]
