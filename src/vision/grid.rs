@@ -119,9 +119,8 @@ pub fn estimate_lattice(
         }
         out
     };
-    let nearest = |horizontal: bool| -> Vec<f64> {
-        nearest_pairs(horizontal).iter().map(|p| p.0).collect()
-    };
+    let nearest =
+        |horizontal: bool| -> Vec<f64> { nearest_pairs(horizontal).iter().map(|p| p.0).collect() };
     let (px, py) = match pitch_px {
         Some(p) => p,
         None => {

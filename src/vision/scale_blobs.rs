@@ -103,7 +103,13 @@ fn blobs_of(
     smoothing: Smoothing,
     grow: bool,
 ) -> Vec<TipBlob> {
-    let found = detect::search_coarse_smoothed(coarse, w_search, None, None, smoothing);
+    // The tips' contrast from the strongest blobs, as many as the part has
+    // positions (as the inspection's own search takes it): the median of
+    // every blob is the fixture texture's where texture blobs outnumber the
+    // tips (Rust 910 811: 2055 blobs at the tips' width beside 10 tips, in
+    // a large frame under σ 2 DN), and a lattice of texture then won.
+    let n_pos = recipe.positions().len();
+    let found = detect::search_coarse_smoothed(coarse, w_search, None, Some(n_pos), smoothing);
     let k = coarse.k as f64;
     let tip_area = area_of_width(w, recipe.pin_shape);
     let reach = (1.5 * w / k).ceil() as usize;
