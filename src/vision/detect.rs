@@ -203,7 +203,7 @@ pub enum Smoothing {
     /// [`Smoothing::Faint`]'s box with the noise floor lowered to
     /// [`LOW_FLOOR_SIGMAS`]. For the very last pass only, whose blobs
     /// must stand a pitch apart to count
-    /// ([`super::top_candidates::last_resort_search`]).
+    /// ([`super::top_candidates::last_passes`]).
     FaintLowFloor,
 }
 

@@ -24,8 +24,8 @@ use super::tip_levels::{
     tip_disc_radius,
 };
 use super::top_candidates::{
-    add_faint_debris, assign_to_positions, faint_tips_to_add, last_resort_search,
-    measure_candidates, use_blobs_at,
+    add_faint_debris, assign_to_positions, faint_tips_to_add, last_passes, measure_candidates,
+    use_blobs_at,
 };
 use super::top_first_fit::FitPoints;
 use super::top_not_proven;
@@ -120,11 +120,11 @@ pub(crate) fn inspect_top_with<P: Px>(
             cands.extend(add);
         }
     }
-    // Still no tip: the last passes ([`last_resort_search`]).
+    // Still no tip, or no two a pitch apart: the last passes
+    // ([`last_passes`]).
     let pitch_px0 = (recipe.pitch_mm[0] * s0, recipe.pitch_mm[1] * s0);
-    if n_pinlike(&cands) == 0
-        && let Some((cs_last, cands_last)) =
-            last_resort_search(plane, sign, pin_px0, pitch_px0, n_pos, &candidates)
+    if let Some((cs_last, cands_last)) =
+        last_passes(plane, sign, pin_px0, pitch_px0, n_pos, &candidates, &cands)
     {
         cs = cs_last;
         cands = cands_last;

@@ -178,7 +178,7 @@ fn at_pitch(d: f64, pitch_px: (f64, f64)) -> bool {
 ///    with them; so this pass counts only when a third of the recipe's
 ///    positions (and two) have a tip-like candidate with another a pitch
 ///    away, which noise alone at 4 σ does not give.
-pub(super) fn last_resort_search<P: Px>(
+fn last_resort_search<P: Px>(
     plane: &Plane<P>,
     sign: f32,
     pin_px: f64,
@@ -222,6 +222,41 @@ pub(super) fn last_resort_search<P: Px>(
         return Some((cs, cands));
     }
     None
+}
+
+/// The last passes ([`last_resort_search`]) where the searches before
+/// them found no tip-like candidate, or found some (`current`) of which
+/// no two stand a pitch apart on a part of two positions or more: then
+/// what they found may be the fixture's texture, the tips lost from the
+/// top-hat, and the last passes' candidates replace them only where more
+/// of theirs stand a pitch from another than `current` holds tip-like
+/// candidates at all. Python seed 720 190: a dark 1 × 18 on a bright
+/// housing 2.4 tips tall, on a dark fixture; in the inverted polarity the
+/// fixture stands at the tips' level, the unbounded closing filled the
+/// housing to it and the tips vanished from the top-hat, while 6 texture
+/// blobs of the fixture passed as tips (no two a pitch apart) and made an
+/// error ("3 pins lie on the grid but outside the recipe's positions").
+/// The hole-reach pass finds the 17 tips, paired. A part whose few tips
+/// stand apart (a 1 × 3 without its middle pin) keeps them: the last
+/// passes would have to pair more candidates than it has tips.
+pub(super) fn last_passes<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    pin_px: f64,
+    pitch: (f64, f64),
+    n_pos: Option<usize>,
+    candidates: &dyn Fn(&CoarseSearch) -> Vec<Candidate>,
+    current: &[Candidate],
+) -> Option<(CoarseSearch, Vec<Candidate>)> {
+    let tips = current.iter().filter(|c| c.pinlike).count();
+    if tips == 0 {
+        return last_resort_search(plane, sign, pin_px, pitch, n_pos, candidates);
+    }
+    if n_pos.unwrap_or(0) < 2 || pitch_pair(current, pitch) {
+        return None;
+    }
+    last_resort_search(plane, sign, pin_px, pitch, n_pos, candidates)
+        .filter(|(_, c)| paired_tips(c, pitch) > tips)
 }
 
 /// Whether two tip-like candidates stand a pitch apart (within ±15 % of

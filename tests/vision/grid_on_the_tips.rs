@@ -133,3 +133,37 @@ fn a_lattice_of_two_pitches_held_by_one_pair_gives_way_to_the_period() {
     // 0.33 contrast under σ 13 DN), not the grid's.
     assert!(c.status_mismatches.len() <= 4, "{:?}", c.status_mismatches);
 }
+
+/// Rust 910 811: a 2 × 6 dark part, tips 6.8 px, in a 1759 × 2463 frame
+/// of textured fixture under almost no noise (σ 2 DN, mm_per_px absent).
+/// At the tips' width the scale's ladder found 2055 texture blobs beside
+/// the 10 tips, and the coarse search's tip contrast, the median of them
+/// all, was the texture's: a lattice of texture at 3.7 px won, and 818
+/// "pins" lay outside the part (an error). The tips' contrast is now the
+/// median of the strongest blobs, as many as the part has positions, as
+/// the inspection's own search takes it.
+#[test]
+fn a_small_part_in_a_large_textured_frame_gives_its_own_scale() {
+    right_and_clean(910_811);
+    let (case, _, ins) = common::envelope_case(910_811);
+    assert!(ins.grid.mm_per_px_estimated);
+    let truth = case.factors.mm_per_px;
+    assert!(
+        (ins.grid.mm_per_px / truth - 1.0).abs() < 0.02,
+        "mm_per_px {} against {truth}",
+        ins.grid.mm_per_px
+    );
+}
+
+/// Rust 1 100 279 (1 × 3, mm_per_px given): the middle pin missing, the
+/// first bent 0.18 pitch toward the last, debris on the housing's corner.
+/// The two tips, 1.82 pitches apart, were the only pair of neighbours, and
+/// one pair off the known pitch was taken for another part (an error). A
+/// bent pin makes such a pair; the part is judged, and fails.
+#[test]
+fn one_pair_of_pins_off_the_pitch_is_judged_not_refused() {
+    let (case, r, ins) = common::envelope_case(1_100_279);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert_eq!(c.extras_found, 1, "the debris on the housing's corner");
+}

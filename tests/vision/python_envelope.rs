@@ -156,6 +156,30 @@ fn scale_found_and_verdict_right(dir: &Path, seed: u64) {
     assert!(c.verdict_ok, "{seed}: {:?}", c.status_mismatches);
 }
 
+/// Python seed 720 190 (a held-out seed): a dark 1 × 18, 18 px tips, on a
+/// bright housing 2.4 tips tall over a dark fixture, scale given. As for
+/// 590 370 below, the tips vanished from the top-hat; but 6 blobs of the
+/// fixture's texture passed as tips, so the last passes were never tried,
+/// and those blobs made an error ("3 pins lie on the grid but outside the
+/// recipe's 1 × 18 positions"). Tips of which no two stand a pitch apart
+/// now send the search to the last passes too (`top_candidates::last_passes`).
+#[test]
+fn texture_taken_for_tips_gives_way_to_the_tips_the_last_pass_finds() {
+    let tmp = tempfile::Builder::new()
+        .prefix("pinsight-pytexture-")
+        .tempdir()
+        .expect("temp dir");
+    let dir = tmp.path().to_path_buf();
+    let seed = 720_190u64;
+    let (recipe, t, _v, img) = render_seed(&dir, seed);
+    assert!(recipe.mm_per_px.is_some(), "{seed}: the scale is given");
+    let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
+        .unwrap_or_else(|e| panic!("{seed}: {e}"));
+    let c = truth::compare(&ins, &t, 15.0);
+    assert!(c.verdict_ok, "{seed}: {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+}
+
 /// Dark round tips (35 px) on a white one-row housing about 2.5 tips tall,
 /// on a fixture darker than the tips, scale not given (seed 590 370, a
 /// tuning seed since 2026-12-02). The coarse search's background closing,
