@@ -65,12 +65,14 @@ pub(super) fn tip_blobs(
     w: f64,
     smoothing: Smoothing,
 ) -> Vec<TipBlob> {
-    blobs_of(recipe, coarse, w, w, smoothing, false)
+    blobs_of(recipe, coarse, w, w, smoothing, false, None)
 }
 
 /// The blobs of about the area of a tip `w` px wide, not touching the
 /// frame, found by the coarse search run for tips `w_search` px wide
-/// (`coarse` built for that width).
+/// (`coarse` built for that width), with the tips' contrast taken from
+/// the `strongest` blobs when given (else from them all; see
+/// [`super::scale::estimate`]).
 ///
 /// A search narrower than the width scored is the last pass for tips whose
 /// own-width search finds nothing: fixture texture blotchy at the tips'
@@ -88,8 +90,17 @@ pub(super) fn tip_blobs_searched_at(
     w_search: f64,
     w: f64,
     smoothing: Smoothing,
+    strongest: Option<usize>,
 ) -> Vec<TipBlob> {
-    blobs_of(recipe, coarse, w_search, w, smoothing, w_search < w)
+    blobs_of(
+        recipe,
+        coarse,
+        w_search,
+        w,
+        smoothing,
+        w_search < w,
+        strongest,
+    )
 }
 
 /// [`tip_blobs_searched_at`], its blobs grown to half their peak
@@ -102,14 +113,9 @@ fn blobs_of(
     w: f64,
     smoothing: Smoothing,
     grow: bool,
+    strongest: Option<usize>,
 ) -> Vec<TipBlob> {
-    // The tips' contrast from the strongest blobs, as many as the part has
-    // positions (as the inspection's own search takes it): the median of
-    // every blob is the fixture texture's where texture blobs outnumber the
-    // tips (Rust 910 811: 2055 blobs at the tips' width beside 10 tips, in
-    // a large frame under σ 2 DN), and a lattice of texture then won.
-    let n_pos = recipe.positions().len();
-    let found = detect::search_coarse_smoothed(coarse, w_search, None, Some(n_pos), smoothing);
+    let found = detect::search_coarse_smoothed(coarse, w_search, None, strongest, smoothing);
     let k = coarse.k as f64;
     let tip_area = area_of_width(w, recipe.pin_shape);
     let reach = (1.5 * w / k).ceil() as usize;
