@@ -189,7 +189,7 @@ fn estimate_faint(
         data: d.as_slice(),
     };
     match smoothing {
-        Some(sm) => estimate_smoothed(&plane, 1.0, r, fs, sm, 1.0).map(|(e, _)| e),
+        Some(sm) => estimate_smoothed(&plane, 1.0, r, fs, sm, 1.0, None).map(|(e, _)| e),
         None => estimate(&plane, 1.0, r, fs),
     }
 }
@@ -272,7 +272,7 @@ fn tips_too_faint_for_the_blob_passes_give_the_scale_by_their_period() {
                 };
                 let held = |sm| {
                     matches!(
-                        estimate_smoothed(&plane, 1.0, &r, fs, sm, 1.0),
+                        estimate_smoothed(&plane, 1.0, &r, fs, sm, 1.0, None),
                         Ok((_, Held::Pitch))
                     )
                 };
@@ -282,7 +282,7 @@ fn tips_too_faint_for_the_blob_passes_give_the_scale_by_their_period() {
                 unheld += 1;
                 // Every blob pass fails here: the estimate was an error.
                 assert!(
-                    estimate_smoothed(&plane, 1.0, &r, fs, Smoothing::Normal, NARROW_SEARCH)
+                    estimate_smoothed(&plane, 1.0, &r, fs, Smoothing::Normal, NARROW_SEARCH, None)
                         .is_err()
                 );
                 if let Ok(e) = estimate(&plane, 1.0, &r, fs) {
