@@ -356,9 +356,10 @@ pub fn estimate<P: Px>(
     recipe: &Recipe,
     full_scale: f32,
 ) -> Result<ScaleEstimate, VisionError> {
-    let pass = |smoothing, ratio| {
-        estimate_smoothed(plane, sign, recipe, full_scale, smoothing, ratio, None)
+    let pass_with = |smoothing, ratio, strongest| {
+        estimate_smoothed(plane, sign, recipe, full_scale, smoothing, ratio, strongest)
     };
+    let pass = |smoothing, ratio| pass_with(smoothing, ratio, None);
     let period = || super::scale_period::estimate(plane, sign, recipe);
     let (e, held) = match pass(Smoothing::Normal, 1.0) {
         Err(e @ VisionError::NoPins { .. }) => {
@@ -380,17 +381,7 @@ pub fn estimate<P: Px>(
     // other structure, whose lattice then wins; Rust 955 323.)
     let n_pos = recipe.positions().len();
     let (e, held) = if e.support > 2 * n_pos {
-        let strongest = Some(n_pos);
-        estimate_smoothed(
-            plane,
-            sign,
-            recipe,
-            full_scale,
-            Smoothing::Normal,
-            1.0,
-            strongest,
-        )
-        .unwrap_or((e, held))
+        pass_with(Smoothing::Normal, 1.0, Some(n_pos)).unwrap_or((e, held))
     } else {
         (e, held)
     };

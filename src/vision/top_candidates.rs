@@ -249,14 +249,11 @@ pub(super) fn last_passes<P: Px>(
     current: &[Candidate],
 ) -> Option<(CoarseSearch, Vec<Candidate>)> {
     let tips = current.iter().filter(|c| c.pinlike).count();
-    if tips == 0 {
-        return last_resort_search(plane, sign, pin_px, pitch, n_pos, candidates);
-    }
-    if n_pos.unwrap_or(0) < 2 || pitch_pair(current, pitch) {
+    if tips > 0 && (n_pos.unwrap_or(0) < 2 || pitch_pair(current, pitch)) {
         return None;
     }
     last_resort_search(plane, sign, pin_px, pitch, n_pos, candidates)
-        .filter(|(_, c)| paired_tips(c, pitch) > tips)
+        .filter(|(_, c)| tips == 0 || paired_tips(c, pitch) > tips)
 }
 
 /// Whether two tip-like candidates stand a pitch apart (within ±15 % of

@@ -41,7 +41,8 @@
 //!   (`grid::lattice_by_consensus`).
 
 use crate::common;
-use pinsight::vision::synth_envelope::Rendered;
+use pinsight::vision::Inspection;
+use pinsight::vision::synth_envelope::{EnvelopeCase, Rendered};
 
 #[test]
 fn a_long_part_under_noise_is_placed_on_its_own_tips() {
@@ -63,8 +64,9 @@ fn a_long_part_under_noise_is_placed_on_its_own_tips() {
 }
 
 /// Inspects `seed` and asserts its verdict, every pin status and the
-/// absence of spurious extras; returns its worst ok-pin centre error (px).
-fn right_and_clean(seed: u64) -> f64 {
+/// absence of spurious extras; returns the case, its inspection and its
+/// worst ok-pin centre error (px).
+fn right_and_clean(seed: u64) -> (EnvelopeCase, Inspection, f64) {
     let (case, r, ins) = common::envelope_case(seed);
     let c = r.compare(&case.factors, &ins);
     assert!(c.verdict_ok, "{seed}: verdict wrong: {:?}", ins.verdict);
@@ -74,9 +76,22 @@ fn right_and_clean(seed: u64) -> f64 {
         c.status_mismatches
     );
     assert_eq!(c.extras_spurious, 0, "{seed}");
-    Rendered::ok_centre_errors(&c)
+    let worst = Rendered::ok_centre_errors(&c)
         .into_iter()
-        .fold(0.0, f64::max)
+        .fold(0.0, f64::max);
+    (case, ins, worst)
+}
+
+/// Asserts that the scale `ins` fitted lies within `tol` (relative) of the
+/// true scale of `case`.
+fn assert_scale_within(case: &EnvelopeCase, ins: &Inspection, tol: f64) {
+    let truth = case.factors.mm_per_px;
+    assert!(
+        (ins.grid.mm_per_px / truth - 1.0).abs() < tol,
+        "{}: mm_per_px {} against {truth}",
+        case.factors.seed,
+        ins.grid.mm_per_px
+    );
 }
 
 #[test]
@@ -89,7 +104,7 @@ fn a_piece_of_a_tip_is_not_a_second_blob_and_a_tip_not_a_piece_of_a_patch() {
 #[test]
 fn a_blurred_parts_grid_is_fitted_to_all_its_tips_and_a_noisy_end_found_by_evidence() {
     for seed in [955_085u64, 955_104] {
-        let worst = right_and_clean(seed);
+        let (_, _, worst) = right_and_clean(seed);
         assert!(worst < 1.5, "{seed}: an ok pin's centre {worst:.2} px off");
     }
 }
@@ -97,16 +112,9 @@ fn a_blurred_parts_grid_is_fitted_to_all_its_tips_and_a_noisy_end_found_by_evide
 #[test]
 fn a_bent_pins_pair_does_not_set_the_pitch_of_a_few_pin_part() {
     for seed in [965_725u64, 955_473] {
-        right_and_clean(seed);
-        let (case, _, ins) = common::envelope_case(seed);
-        let grid = &ins.grid;
-        let truth = case.factors.mm_per_px;
+        let (case, ins, _) = right_and_clean(seed);
         // Before: 0.0367 against 0.0319 (965 725), 0.0265 against 0.0301.
-        assert!(
-            (grid.mm_per_px / truth - 1.0).abs() < 0.02,
-            "{seed}: mm_per_px {} against {truth}",
-            grid.mm_per_px
-        );
+        assert_scale_within(&case, &ins, 0.02);
     }
 }
 
@@ -121,12 +129,7 @@ fn a_bent_pins_pair_does_not_set_the_pitch_of_a_few_pin_part() {
 fn a_lattice_of_two_pitches_held_by_one_pair_gives_way_to_the_period() {
     let (case, r, ins) = common::envelope_case(1_030_443);
     assert!(ins.grid.mm_per_px_estimated);
-    let truth = case.factors.mm_per_px;
-    assert!(
-        (ins.grid.mm_per_px / truth - 1.0).abs() < 0.01,
-        "mm_per_px {} against {truth}",
-        ins.grid.mm_per_px
-    );
+    assert_scale_within(&case, &ins, 0.01);
     let c = r.compare(&case.factors, &ins);
     assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
     // Before: 22 statuses wrong; the few left are the noise's (tips at
@@ -139,20 +142,15 @@ fn a_lattice_of_two_pitches_held_by_one_pair_gives_way_to_the_period() {
 /// At the tips' width the scale's ladder found 2055 texture blobs beside
 /// the 10 tips, and the coarse search's tip contrast, the median of them
 /// all, was the texture's: a lattice of texture at 3.7 px won, and 818
-/// "pins" lay outside the part (an error). The tips' contrast is now the
-/// median of the strongest blobs, as many as the part has positions, as
-/// the inspection's own search takes it.
+/// "pins" lay outside the part (an error). A lattice matched by more
+/// blobs than twice the part's positions is no part: the ladder runs
+/// again with the tips' contrast from the strongest blobs, as many as the
+/// part has positions, as the inspection's own search takes it.
 #[test]
 fn a_small_part_in_a_large_textured_frame_gives_its_own_scale() {
-    right_and_clean(910_811);
-    let (case, _, ins) = common::envelope_case(910_811);
+    let (case, ins, _) = right_and_clean(910_811);
     assert!(ins.grid.mm_per_px_estimated);
-    let truth = case.factors.mm_per_px;
-    assert!(
-        (ins.grid.mm_per_px / truth - 1.0).abs() < 0.02,
-        "mm_per_px {} against {truth}",
-        ins.grid.mm_per_px
-    );
+    assert_scale_within(&case, &ins, 0.02);
 }
 
 /// Rust 1 100 279 (1 × 3, mm_per_px given): the middle pin missing, the

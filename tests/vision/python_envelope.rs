@@ -165,19 +165,7 @@ fn scale_found_and_verdict_right(dir: &Path, seed: u64) {
 /// now send the search to the last passes too (`top_candidates::last_passes`).
 #[test]
 fn texture_taken_for_tips_gives_way_to_the_tips_the_last_pass_finds() {
-    let tmp = tempfile::Builder::new()
-        .prefix("pinsight-pytexture-")
-        .tempdir()
-        .expect("temp dir");
-    let dir = tmp.path().to_path_buf();
-    let seed = 720_190u64;
-    let (recipe, t, _v, img) = render_seed(&dir, seed);
-    assert!(recipe.mm_per_px.is_some(), "{seed}: the scale is given");
-    let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
-        .unwrap_or_else(|e| panic!("{seed}: {e}"));
-    let c = truth::compare(&ins, &t, 15.0);
-    assert!(c.verdict_ok, "{seed}: {:?}", ins.verdict);
-    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+    every_status_right_at_the_given_scale(720_190, "pinsight-pytexture-");
 }
 
 /// Dark round tips (35 px) on a white one-row housing about 2.5 tips tall,
@@ -220,14 +208,19 @@ fn dark_tips_on_a_narrow_housing_over_a_black_fixture_are_found() {
 /// renderer's truth.
 #[test]
 fn a_bent_pin_of_two_is_placed_by_the_housing_under_noise() {
-    // Removed when `tmp` drops, on a failed assertion too.
+    every_status_right_at_the_given_scale(590_360, "pinsight-pybent2-");
+}
+
+/// Renders `seed` into a temporary directory named from `prefix` (removed
+/// when it drops, on a failed assertion too) and asserts that its recipe
+/// gives the scale and that the verdict and every pin's status match the
+/// renderer's truth.
+fn every_status_right_at_the_given_scale(seed: u64, prefix: &str) {
     let tmp = tempfile::Builder::new()
-        .prefix("pinsight-pybent2-")
+        .prefix(prefix)
         .tempdir()
         .expect("temp dir");
-    let dir = tmp.path().to_path_buf();
-    let seed = 590_360u64;
-    let (recipe, t, _v, img) = render_seed(&dir, seed);
+    let (recipe, t, _v, img) = render_seed(tmp.path(), seed);
     assert!(recipe.mm_per_px.is_some(), "{seed}: the scale is given");
     let ins = vision::inspect_path(&recipe, &img, &InspectOptions::default())
         .unwrap_or_else(|e| panic!("{seed}: {e}"));
