@@ -414,7 +414,7 @@ fn show(seed: u64) {
             );
             for (p, t) in ins.pins.iter().zip(&r.truth.pins) {
                 println!(
-                    "  ({},{}) {:?} (truth {:?}) at {:?},{:?} truth {:?},{:?} nominal {:.1},{:.1} area {:?} off {:?} height {:?} (truth {:?})",
+                    "  ({},{}) {:?} (truth {:?}) at {:?},{:?} truth {:?},{:?} nominal {:.1},{:.1} area {:?} (truth {:?}) off {:?} height {:?} (truth {:?}){}",
                     p.row,
                     p.col,
                     p.status,
@@ -426,9 +426,14 @@ fn show(seed: u64) {
                     p.nominal_x_px,
                     p.nominal_y_px,
                     p.area_ratio,
+                    t.area_ratio,
                     p.offset_mm,
                     p.height_mm,
-                    t.height_mm
+                    t.height_mm,
+                    p.reason
+                        .as_deref()
+                        .map(|r| format!(" — {r}"))
+                        .unwrap_or_default()
                 );
             }
             for e in &ins.extras {
