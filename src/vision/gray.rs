@@ -198,6 +198,12 @@ pub struct Coarse {
 }
 
 impl Coarse {
+    /// The same grid (size, step, quantum) holding `data` instead: a map
+    /// derived from this image, e.g. its background.
+    pub fn with_data(&self, data: Vec<f32>) -> Coarse {
+        Coarse { data, ..*self }
+    }
+
     pub fn build<P: Px>(p: &Plane<P>, k: usize, sign: f32) -> Coarse {
         let k = k.clamp(1, 8);
         let w = p.w / k;

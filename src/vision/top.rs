@@ -11,7 +11,7 @@ use super::InspectOptions;
 use super::detect::{self, CoarseSearch};
 use super::error::VisionError;
 use super::fit::{self, Similarity};
-use super::gray::{Coarse, ImageInfo, Plane, Px};
+use super::gray::{ImageInfo, Plane, Px};
 use super::grid::{self, LatticeError};
 use super::housing::find_housing;
 use super::measure::{self, Roi};
@@ -390,13 +390,7 @@ pub(crate) fn inspect_top_with<P: Px>(
     // background level (housing) at its place; vignetting and gradients
     // change both slowly, so the nearest tips say what a tip must look like
     // anywhere on the part.
-    let bg_img = Coarse {
-        w: cs.coarse.w,
-        h: cs.coarse.h,
-        k: cs.coarse.k,
-        data: cs.background.clone(),
-        quantum: cs.coarse.quantum,
-    };
+    let bg_img = cs.coarse.with_data(cs.background.clone());
     let bg_at = |x: f64, y: f64| {
         let (cx, cy) = bg_img.from_full(x, y);
         bg_img.bilinear(cx, cy)
@@ -422,7 +416,14 @@ pub(crate) fn inspect_top_with<P: Px>(
     }
     // Under blur, the centres of intact tips from a model of the tip in
     // its clearance hole (`blur_tip`), then the grid fitted again to them.
-    let refined = if blur_sigma > super::blur_tip::MIN_SIGMA_PX {
+    let tip_model = super::blur_tip::TipModel {
+        plane,
+        sign,
+        recipe,
+        blur_sigma,
+        min_pitch_px,
+    };
+    let (refined, part_shape) = if blur_sigma > super::blur_tip::MIN_SIGMA_PX {
         let intact: Vec<(usize, usize)> = pos_cand
             .iter()
             .enumerate()
@@ -437,19 +438,9 @@ pub(crate) fn inspect_top_with<P: Px>(
                 cands[ci].m.elongation < 3.0 && a >= ta_lo && a <= ta_hi
             })
             .collect();
-        super::blur_tip::refine_centres(
-            plane,
-            sign,
-            recipe,
-            &sim,
-            &nominal,
-            &intact,
-            &mut cands,
-            blur_sigma,
-            min_pitch_px,
-        )
+        tip_model.refine_centres(&sim, &nominal, &intact, &mut cands)
     } else {
-        Vec::new()
+        (Vec::new(), None)
     };
     if refined.len() >= 2 {
         let model: Vec<(f64, f64)> = refined
@@ -558,8 +549,9 @@ pub(crate) fn inspect_top_with<P: Px>(
         disc_r,
         pin_px,
     };
+    let first_look: Vec<bool> = pos_cand.iter().map(Option::is_some).collect();
     for pi in 0..positions.len() {
-        if pos_cand[pi].is_some() {
+        if first_look[pi] {
             continue;
         }
         let (nx, ny) = nominal[pi];
@@ -643,6 +635,16 @@ pub(crate) fn inspect_top_with<P: Px>(
             cand_used.push(true);
             pos_cand[pi] = Some(cands.len() - 1);
         }
+    }
+    // Every other tip on a position (the second look's finds, tips whose
+    // noisy first area kept them from the model) is measured as the intact
+    // ones were: by the model, with the shape those gave held (`blur_tip`).
+    if let Some(shape) = part_shape {
+        let later: Vec<_> = (0..positions.len())
+            .filter(|&pi| !dim_tip[pi] && !refined.iter().any(|r| r.0 == pi))
+            .filter_map(|pi| pos_cand[pi].map(|ci| (pi, ci)))
+            .collect();
+        tip_model.refine_held(&sim, &nominal, &later, &mut cands, shape);
     }
 
     let tol = &recipe.tolerance;

@@ -12,6 +12,7 @@ mod common;
 
 mod bad_input;
 mod blurred_tip_areas;
+mod blurred_tip_centres;
 mod cli;
 mod envelope;
 mod extras;
