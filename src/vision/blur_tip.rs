@@ -73,23 +73,26 @@ impl<P: Px> TipModel<'_, P> {
                 fit_tip(self.plane, self.sign, start, &self.prior(sim, nominal[pi]))
             })
             .collect();
-        let part = common_shape(&first);
-        let fits: Vec<_> = intact
-            .iter()
-            .zip(first)
-            .map(|(&(pi, ci), f)| match part {
-                Some(shape) => (pi, ci, self.held_fit(sim, nominal[pi], &cands[ci], shape)),
-                None => (pi, ci, f),
-            })
-            .collect();
-        (settle(self.recipe, sim, nominal, fits, cands), part)
+        match common_shape(&first) {
+            Some(shape) => {
+                let done = self.refine_in_part(sim, nominal, intact, cands, shape);
+                (done, Some(shape))
+            }
+            None => {
+                let fits = intact.iter().zip(first).map(|(&(pi, ci), f)| (pi, ci, f));
+                (
+                    settle(self.recipe, sim, nominal, fits.collect(), cands),
+                    None,
+                )
+            }
+        }
     }
 
     /// Refines, with the part's `shape` as prior, the centres of the tips on
-    /// `which` ((position, candidate) pairs): tips a later look found, after
-    /// the part's shape was learnt from the first ones. Returns the pairs
-    /// whose fit settled.
-    pub(crate) fn refine_held(
+    /// `which` ((position, candidate) pairs): the intact tips the shape was
+    /// learnt from, and tips a later look found. Returns the pairs whose fit
+    /// settled.
+    pub(crate) fn refine_in_part(
         &self,
         sim: &Similarity,
         nominal: &[(f64, f64)],
@@ -99,14 +102,20 @@ impl<P: Px> TipModel<'_, P> {
     ) -> Vec<(usize, usize)> {
         let fits: Vec<_> = which
             .iter()
-            .map(|&(pi, ci)| (pi, ci, self.held_fit(sim, nominal[pi], &cands[ci], shape)))
+            .map(|&(pi, ci)| {
+                (
+                    pi,
+                    ci,
+                    self.fit_in_part(sim, nominal[pi], &cands[ci], shape),
+                )
+            })
             .collect();
         settle(self.recipe, sim, nominal, fits, cands)
     }
 
     /// The fit of the tip `c` in the hole at `hole` within the part's
     /// shape (σ held, the sizes drawn to the part's).
-    fn held_fit(
+    fn fit_in_part(
         &self,
         sim: &Similarity,
         hole: (f64, f64),
@@ -114,7 +123,7 @@ impl<P: Px> TipModel<'_, P> {
         shape: PartShape,
     ) -> Option<TipFit> {
         let mut prior = self.prior(sim, hole);
-        prior.held = Some(shape);
+        prior.part = Some(shape);
         fit_tip(self.plane, self.sign, (c.m.x, c.m.y), &prior)
     }
 }
@@ -231,7 +240,7 @@ pub(crate) fn prior_at(
         sigma: blur_sigma,
         hole,
         window: (1.5 * half_w + 3.0 * blur_sigma + 2.0).min(0.5 * min_pitch_px),
-        held: None,
+        part: None,
     }
 }
 
@@ -282,7 +291,7 @@ pub struct TipPrior {
     pub window: f64,
     /// The part's shape ([`common_shape`]): σ held there, the half-widths
     /// drawn to it ([`SIZE_PRIOR_PX`]).
-    pub held: Option<PartShape>,
+    pub part: Option<PartShape>,
 }
 
 /// The fitted tip.
@@ -302,11 +311,11 @@ pub struct TipFit {
 fn clamp_params(p: &mut Params, prior: &TipPrior) {
     let w0 = prior.half_w;
     p[2] = p[2].clamp(0.6 * w0, 1.5 * w0);
-    p[4] = p[4].clamp(0.2, 3.0 * prior.sigma.max(0.5) + 1.0);
-    if let Some(h) = prior.held {
-        p[4] = h.sigma;
-    }
     p[3] = p[3].clamp(p[2] + 0.05, 3.0 * w0 + 1.0);
+    p[4] = match prior.part {
+        Some(h) => h.sigma,
+        None => p[4].clamp(0.2, 3.0 * prior.sigma.max(0.5) + 1.0),
+    };
 }
 
 /// Fits the tip model around `prior.hole`, starting from the tip centre
@@ -354,11 +363,8 @@ pub fn fit_tip<P: Px>(
         prior.sigma.max(0.5),
     ];
     clamp_params(&mut p, prior);
-    // Held parameters take no step: their rows and columns are the
-    // identity's.
-    let held = [false, false, false, false, prior.held.is_some()];
     // The sizes' priors as more residuals, w · (size − part's size).
-    let priors: [(usize, f64, f64); 2] = match prior.held {
+    let priors: [(usize, f64, f64); 2] = match prior.part {
         Some(h) => [
             (2, h.noise / SIZE_PRIOR_PX, h.half_w),
             (3, h.noise / SIZE_PRIOR_PX, h.hole_half),
@@ -393,13 +399,15 @@ pub fn fit_tip<P: Px>(
             jtj[i][i] += w * w;
             jtr[i] -= w * w * (p[i] - v0);
         }
-        for h in (0..NP).filter(|&h| held[h]) {
+        // The part's σ takes no step: its row and column are the
+        // identity's.
+        if prior.part.is_some() {
             for a in 0..NP {
-                jtj[a][h] = 0.0;
-                jtj[h][a] = 0.0;
+                jtj[a][4] = 0.0;
+                jtj[4][a] = 0.0;
             }
-            jtj[h][h] = 1.0;
-            jtr[h] = 0.0;
+            jtj[4][4] = 1.0;
+            jtr[4] = 0.0;
         }
         let mut improved = false;
         let mut step_len = 0.0;
@@ -488,7 +496,7 @@ mod tests {
         v
     }
 
-    fn prior(half_w: f64, sigma: f64, held: Option<PartShape>) -> TipPrior {
+    fn prior(half_w: f64, sigma: f64, part: Option<PartShape>) -> TipPrior {
         TipPrior {
             round: false,
             theta: 0.0,
@@ -496,7 +504,7 @@ mod tests {
             sigma,
             hole: (20.0, 20.0),
             window: 1.5 * half_w + 3.0 * sigma + 2.0,
-            held,
+            part,
         }
     }
 

@@ -638,13 +638,13 @@ pub(crate) fn inspect_top_with<P: Px>(
     }
     // Every other tip on a position (the second look's finds, tips whose
     // noisy first area kept them from the model) is measured as the intact
-    // ones were: by the model, with the shape those gave held (`blur_tip`).
+    // ones were: by the model, within the shape those gave (`blur_tip`).
     if let Some(shape) = part_shape {
         let later: Vec<_> = (0..positions.len())
             .filter(|&pi| !dim_tip[pi] && !refined.iter().any(|r| r.0 == pi))
             .filter_map(|pi| pos_cand[pi].map(|ci| (pi, ci)))
             .collect();
-        tip_model.refine_held(&sim, &nominal, &later, &mut cands, shape);
+        tip_model.refine_in_part(&sim, &nominal, &later, &mut cands, shape);
     }
 
     let tol = &recipe.tolerance;
