@@ -86,7 +86,7 @@ pub(crate) fn find_housing(
 }
 
 /// How far out from the outermost pins an edge is looked for, in pitches:
-/// an end pin missing (one pitch) and a margin of up to 1.5 pitches.
+/// an end pin missing (one pitch) and a margin of about 1.5 pitches.
 const PROFILE_PITCHES: f64 = 2.6;
 
 /// The most profiles averaged for one side.
@@ -102,14 +102,29 @@ fn across_lines(span: (f64, f64), spacing: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The step reach ([`STEP_REACH_PX`] or [`STEP_REACH_PITCH`] of `pitch`
+/// px, the longer) in profile samples, half a coarse pixel (`k` full px)
+/// apart.
+fn reach_samples(k: f64, pitch: f64) -> usize {
+    let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
+    ((reach / (0.5 * k)).round() as usize).max(1)
+}
+
+/// The largest difference between samples of `prof` `gap` apart.
+fn max_step(prof: &[f32], gap: usize) -> f32 {
+    (0..prof.len().saturating_sub(gap))
+        .map(|i| (prof[i + gap] - prof[i]).abs())
+        .fold(0f32, f32::max)
+}
+
 /// Where (a fractional index into `prof`, samples half a coarse pixel
 /// apart, `k` full px per coarse px) the outermost strong step of `prof`
 /// lies: the outermost local maximum of the step filter at half its
-/// largest value or more, placed by the central difference near it. The step filter is the difference of the means
-/// over [`STEP_REACH_PX`] or [`STEP_REACH_PITCH`] of `pitch` (px, the
-/// longer) on either side: it reads a blurred or chamfered edge's whole
-/// height where a central difference holds a slice of it, and it averages
-/// the noise down. With the central difference, the outermost sample at
+/// largest value or more, placed by a narrower difference near it. The
+/// step filter is the difference of the means over the step reach
+/// ([`reach_samples`]) on either side: it reads a blurred or chamfered
+/// edge's whole height where a central difference holds a slice of it,
+/// and it averages the noise down. With the central difference, the outermost sample at
 /// 0.4 of the largest was the noise of the fixture beyond the edge in one
 /// profile in three under σ 13–15 DN (Rust 941 473, 961 450: the edge
 /// read at the search's end, the housing centre half a pitch off and the
@@ -117,11 +132,10 @@ fn across_lines(span: (f64, f64), spacing: f64) -> Vec<f64> {
 /// short of `min_step`.
 fn outermost_step(prof: &[f32], min_step: f32, k: f64, pitch: f64) -> Option<f64> {
     let n = prof.len();
-    let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
-    // Each box spans the reach on its side (2d samples of half a coarse
-    // px), cut short at the profile's ends down to a quarter of that: an
-    // edge close outside the end pin has little housing inside it.
-    let w = 2 * ((reach / (0.5 * k)).round() as usize).max(1);
+    // Each box spans the reach on its side (twice the reach in samples),
+    // cut short at the profile's ends down to a quarter of that: an edge
+    // close outside the end pin has little housing inside it.
+    let w = 2 * reach_samples(k, pitch);
     let least = (w / 4).max(2);
     if n < 2 * least {
         return None;
@@ -140,11 +154,7 @@ fn outermost_step(prof: &[f32], min_step: f32, k: f64, pitch: f64) -> Option<f64
     // between single samples up to twice the boxes apart (the boxes lose
     // part of a ramp as long as themselves: Rust 970 155's chamfered edge
     // close outside the end pin read 23 of its 30 DN against 25 asked).
-    let height = |gap: usize| {
-        (0..n.saturating_sub(gap))
-            .map(|i| (prof[i + gap] - prof[i]).abs())
-            .fold(0f32, f32::max)
-    };
+    let height = |gap: usize| max_step(prof, gap);
     if fmax.max(height(2)).max(height(w)).max(height(2 * w)) < min_step {
         return None;
     }
@@ -152,14 +162,14 @@ fn outermost_step(prof: &[f32], min_step: f32, k: f64, pitch: f64) -> Option<f64
     while j > 0 && filter[j - 1] > filter[j] {
         j -= 1;
     }
-    // The filter finds the edge; a narrow difference places it, within a
-    // box's width either side: the outermost sample at 0.4 of the steepest
-    // there. The boxes blur a housing's two steps (fixture →
-    // chamfer band → housing) into one between them, 16 px inside the
-    // outer one on Rust 945 509 (50 px tips), whose outline then no longer
-    // held the pose that judges its bent end pin.
-    // The difference is of means over a quarter of a box either side, so
-    // that the noise the boxes averaged away does not come back.
+    // The filter finds the edge; a narrow difference (of means over a
+    // quarter of a box either side, so that the noise the boxes averaged
+    // away does not come back) places it, within a box's width either
+    // side: the outermost sample at 0.4 of the steepest there. The boxes
+    // blur a housing's two steps (fixture → chamfer band → housing) into
+    // one between them, 16 px inside the outer one on Rust 945 509 (50 px
+    // tips), whose outline then no longer held the pose that judges its
+    // bent end pin.
     let h = (w / 4).max(1);
     let m = j + least;
     let (lo, hi) = (m.saturating_sub(w).max(h), (m + w).min(n - h));
@@ -177,8 +187,7 @@ fn outermost_step(prof: &[f32], min_step: f32, k: f64, pitch: f64) -> Option<f64
 /// steepest central difference, the sharp ones where there are any, as
 /// each side was read before the profiles were averaged.
 fn lines_median_step(profiles: &[Vec<f32>], min_step: f32, k: f64, pitch: f64) -> Option<f64> {
-    let reach = STEP_REACH_PX.max(STEP_REACH_PITCH * pitch);
-    let d = ((reach / (0.5 * k)).round() as usize).max(1);
+    let d = reach_samples(k, pitch);
     let found: Vec<(f64, bool)> = profiles
         .iter()
         .filter_map(|prof| {
@@ -188,10 +197,7 @@ fn lines_median_step(profiles: &[Vec<f32>], min_step: f32, k: f64, pitch: f64) -
                 .collect();
             let gmax = g.iter().cloned().fold(0f32, f32::max);
             let sharp = gmax >= min_step;
-            let height = (d..n.saturating_sub(d))
-                .map(|i| (prof[i + d] - prof[i - d]).abs())
-                .fold(0f32, f32::max);
-            if !sharp && height < min_step {
+            if !sharp && max_step(prof, 2 * d) < min_step {
                 return None;
             }
             let i = g.iter().rposition(|&v| v >= 0.4 * gmax)?;
