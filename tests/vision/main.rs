@@ -25,3 +25,4 @@ mod one_tip;
 mod python_envelope;
 mod side;
 mod synth;
+mod tips_beside_structure;
