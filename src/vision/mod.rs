@@ -73,6 +73,7 @@ mod top_first_fit;
 mod top_fixture;
 mod top_noisy;
 mod top_not_proven;
+mod top_off_hole;
 mod top_outline;
 mod top_ridge;
 mod top_shoulder;

@@ -9,6 +9,7 @@
 
 use super::InspectOptions;
 use super::detect::{self, CoarseSearch};
+use super::disc::disc_energy;
 use super::error::VisionError;
 use super::fit::{self, Similarity};
 use super::gray::{ImageInfo, Plane, Px};
@@ -24,7 +25,7 @@ use super::tip_levels::{
     tip_disc_radius,
 };
 use super::top_candidates::{
-    add_faint_debris, assign_to_positions, faint_tips_to_add, last_passes, measure_candidates,
+    add_faint_debris, assign_to_positions, faint_pass, last_passes, measure_candidates,
     use_blobs_at,
 };
 use super::top_first_fit::FitPoints;
@@ -84,41 +85,10 @@ pub(crate) fn inspect_top_with<P: Px>(
             .collect()
     };
     let mut cands = candidates(&cs);
-    // Too few tips: small faint tips under heavy noise peak below the
-    // coarse search's noise floor with its usual smoothing box, all of
-    // them or only those in a dim part of the frame; a second pass with
-    // the wider one (`Smoothing::Faint`) finds them. With no tip at all
-    // the second pass replaces the first; otherwise the first pass's blobs
-    // stay (debris small against a tip is flattened by the wider box) and
-    // the second adds its tip-like blobs that stand a pitch from a tip
-    // (`faint_tips_to_add`). Images whose tips the first pass finds all of
-    // are unchanged.
-    let n_pinlike = |c: &[Candidate]| c.iter().filter(|c| c.pinlike).count();
-    if n_pinlike(&cands) < recipe.positions().len() {
-        let cs2 = detect::coarse_search_smoothed(
-            plane,
-            sign,
-            pin_px0,
-            None,
-            n_pos,
-            detect::Smoothing::Faint,
-        );
-        let cands2 = candidates(&cs2);
-        if n_pinlike(&cands) == 0 {
-            if n_pinlike(&cands2) > 0 {
-                cs = cs2;
-                cands = cands2;
-            }
-        } else {
-            let (px, py) = (recipe.pitch_mm[0] * s0, recipe.pitch_mm[1] * s0);
-            let pitch = match (recipe.rows > 1, recipe.cols > 1) {
-                (true, true) => (px, py),
-                (false, _) => (px, px),
-                (true, false) => (py, py),
-            };
-            let add = faint_tips_to_add(&cands, cands2, pin_px0, pitch);
-            cands.extend(add);
-        }
+    // Too few tips: a second pass with the wider smoothing box
+    // ([`faint_pass`]).
+    if let Some(cs2) = faint_pass(plane, sign, recipe, pin_px0, &candidates, &mut cands) {
+        cs = cs2;
     }
     // Still no tip, or no two a pitch apart: the last passes
     // ([`last_passes`]).
@@ -514,8 +484,7 @@ pub(crate) fn inspect_top_with<P: Px>(
     if blurred {
         for &ci in pos_cand.iter().flatten() {
             let m = &mut cands[ci].m;
-            m.energy =
-                super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
+            m.energy = disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
         }
     }
     let area_of =
@@ -549,9 +518,39 @@ pub(crate) fn inspect_top_with<P: Px>(
         disc_r,
         pin_px,
     };
+    let recut = super::top_off_hole::Recut {
+        plane,
+        sign,
+        half: (0.9 * pin_px + 2.0).min(0.5 * min_pitch_px),
+        r_assign,
+        tip_px,
+        levels: &levels,
+        loc: opts.localiser,
+        dilate,
+    };
     let first_look: Vec<bool> = pos_cand.iter().map(Option::is_some).collect();
     for pi in 0..positions.len() {
         if first_look[pi] {
+            // A tip measured with the structure it touches, off its hole or
+            // of no tip-like area (`top_off_hole`). Where the model
+            // measured it (`refined`), the model's measure stands.
+            let (nx, ny) = nominal[pi];
+            if let Some(ci) = pos_cand[pi].filter(|&ci| {
+                let m = &cands[ci].m;
+                !cands[ci].pinlike
+                    && ((m.x - nx).hypot(m.y - ny) > OFF_HOLE * pin_px
+                        || !super::top_off_hole::AREA.contains(&(m.area_px / tip_px)))
+            }) && let Some(mut m) = recut.tip(&cands[ci], (nx, ny))
+            {
+                cands[ci].pinlike = true;
+                if !refined.iter().any(|r| r.0 == pi) {
+                    if blurred {
+                        let e = disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
+                        m.energy = e;
+                    }
+                    cands[ci].m = m;
+                }
+            }
             continue;
         }
         let (nx, ny) = nominal[pi];
@@ -584,8 +583,7 @@ pub(crate) fn inspect_top_with<P: Px>(
             continue;
         };
         if blurred {
-            m.energy =
-                super::disc::disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
+            m.energy = disc_energy(plane, sign, (m.x, m.y), disc_r, level_at(m.x, m.y));
         }
         let rho = contrast_ratio(m.hi, t_exp, b_exp);
         let snr = snr_of(&m);

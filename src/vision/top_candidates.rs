@@ -8,6 +8,7 @@ use super::InspectOptions;
 use super::detect::{self, CoarseSearch};
 use super::gray::{Plane, Px};
 use super::measure::{self, BlobMeasure, Roi};
+use super::recipe::Recipe;
 use super::tip_levels::{Candidate, MIN_SNR, snr_of};
 
 /// Full-resolution measurement of every coarse blob.
@@ -104,6 +105,56 @@ pub(super) fn add_faint_debris<P: Px>(
             used.push(false);
         }
     }
+}
+
+/// Too few tips: small faint tips under heavy noise peak below the coarse
+/// search's noise floor with its usual smoothing box, all of them or only
+/// those in a dim part of the frame; a second pass with the wider one
+/// (`Smoothing::Faint`) finds them. With no tip at all the second pass
+/// replaces the first, and its search is returned to measure from; otherwise
+/// the first pass's blobs stay (debris small against a tip is flattened by
+/// the wider box) and the second adds its tip-like blobs that stand a
+/// pitch from a tip ([`faint_tips_to_add`]). Images whose tips the first
+/// pass finds all of are unchanged.
+pub(super) fn faint_pass<P: Px>(
+    plane: &Plane<P>,
+    sign: f32,
+    recipe: &Recipe,
+    pin_px: f64,
+    candidates: &dyn Fn(&CoarseSearch) -> Vec<Candidate>,
+    cands: &mut Vec<Candidate>,
+) -> Option<CoarseSearch> {
+    let n_pos = recipe.positions().len();
+    let n_pinlike = |c: &[Candidate]| c.iter().filter(|c| c.pinlike).count();
+    if n_pinlike(cands) >= n_pos {
+        return None;
+    }
+    let cs2 = detect::coarse_search_smoothed(
+        plane,
+        sign,
+        pin_px,
+        None,
+        Some(n_pos),
+        detect::Smoothing::Faint,
+    );
+    let cands2 = candidates(&cs2);
+    if n_pinlike(cands) == 0 {
+        if n_pinlike(&cands2) == 0 {
+            return None;
+        }
+        *cands = cands2;
+        return Some(cs2);
+    }
+    let s0 = pin_px / recipe.pin_mm;
+    let (px, py) = (recipe.pitch_mm[0] * s0, recipe.pitch_mm[1] * s0);
+    let pitch = match (recipe.rows > 1, recipe.cols > 1) {
+        (true, true) => (px, py),
+        (false, _) => (px, px),
+        (true, false) => (py, py),
+    };
+    let add = faint_tips_to_add(cands, cands2, pin_px, pitch);
+    cands.extend(add);
+    None
 }
 
 /// The second pass's tip-like blobs worth adding to the first pass's
