@@ -238,27 +238,25 @@ impl HousingPose {
 }
 
 /// The housing's four sides measured at full resolution in the frame of
-/// `sim` (part-frame mm), starting from the coarse outline `rect` ([u0, u1,
-/// v0, v1], mm) of a part whose pins span ±`field` mm. Each side is
-/// profiled across at up to 41 places along its middle (±60 % of its half
-/// length: rounded corners are symmetric and leave the slope and the centre
-/// alone), neighbouring profiles are averaged into 4–10 segments, in each
-/// the outermost strong step (a box difference over ±3 px) is placed to a
-/// sub-pixel by a parabola, and a robust line through them gives the side's
-/// direction and place. Outermost, not steepest: a housing's edge may have
-/// two steps of similar height (fixture → chamfer band → housing), and
-/// taking the steeper one let the choice alternate along a side (Rust
-/// 840 510). A side near the image's border is profiled up to the border, if
-/// that still leaves the step's two boxes past the edge (dropping it
-/// dropped the pose of a few pins' part shifted near the frame's border:
-/// Rust 910 508). `None` unless all four sides are found with most segments
-/// on one straight edge, no side has a nearly strong step beyond the chosen
-/// one in many segments (opposite sides could then take different steps and
-/// shift the centre by half the chamfer band), and all four agree on the
+/// `sim` (part-frame mm), starting from the coarse outline `rect`
+/// ([u0, u1, v0, v1], mm) of a part whose pins span ±`field` mm. Each side
+/// is profiled across at up to 41 places along its middle (±60 % of its
+/// half length: rounded corners are symmetric and leave the slope and
+/// the centre alone), neighbouring profiles are averaged into 4–10
+/// segments, in each the outermost strong step (a box difference over
+/// ±3 px) is placed to a sub-pixel by a parabola, and a robust line
+/// through them gives the side's direction and place. Outermost, not
+/// steepest: a housing's edge may have two steps of similar height
+/// (fixture → chamfer band → housing), and taking the steeper one let
+/// the choice alternate along a side (Rust 840 510). `None` unless all
+/// four sides are found with most segments on one straight edge, no
+/// side has a nearly strong step beyond the chosen one in many segments
+/// (opposite sides could then take different steps and shift the
+/// centre by half the chamfer band), and all four agree on the
 /// rotation, or three do and the fourth is placed by its points at their
-/// slope. This is a ruler independent of the pins: with two or three pins
-/// the similarity fit bends its rotation, centre and scale to any one pin's
-/// bend, the housing does not.
+/// slope. This is a ruler independent of the pins: with two or three
+/// pins the similarity fit bends its rotation, centre and scale to any
+/// one pin's bend, the housing does not.
 pub(crate) fn measure_pose<P: Px>(
     plane: &Plane<P>,
     sim: &Similarity,
@@ -313,27 +311,16 @@ pub(crate) fn measure_pose<P: Px>(
                     acc / ACROSS_PX.len() as f64
                 })
                 .collect();
+            if prof.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
             profs.push((t, prof));
-        }
-        // A housing near the image's border: its profiles are cut where
-        // they leave the image, which must be outside the edge by the step's
-        // two boxes (the inner end, on the housing, must be in).
-        let n_s = profs
-            .iter()
-            .map(|p| p.1.iter().position(|v| !v.is_finite()).unwrap_or(n_s))
-            .min()
-            .unwrap_or(0);
-        let box_w = ((BOX_PX * 2.0) as usize).max(1);
-        if (n_s as f64) < w_in / step + (2 * box_w + 2) as f64 {
-            return None;
-        }
-        for p in &mut profs {
-            p.1.truncate(n_s);
         }
         // Neighbouring profiles averaged into segments, and each segment's
         // step strength by a box difference: one pixel's step of a faint,
         // blurred edge was no larger than the noise.
         let n_seg = (n_prof / PROFILES_PER_SEGMENT).clamp(4, 10);
+        let box_w = ((BOX_PX * 2.0) as usize).max(1);
         let profs: Vec<(f64, Vec<f64>)> = (0..n_seg)
             .map(|k| {
                 let (a, b) = (k * n_prof / n_seg, (k + 1) * n_prof / n_seg);

@@ -88,23 +88,3 @@ fn an_end_pin_missing_is_placed_by_a_noisy_housing_edge() {
         placed_right(seed);
     }
 }
-
-/// Two or three pins take the grid's pose from the housing's outline
-/// (`top_outline::for_few_pins`), but a side whose profiles left the
-/// image anywhere was dropped, and the pose with it: a housing near the
-/// frame's border then left the grid to the pins' own fit, which turned
-/// to absorb a bent pin (every pin read ok). The profiles are now cut at
-/// the image's border, as long as they still run the step's two boxes
-/// past the edge (`housing::measure_pose`). Tuning seeds of 2026-12-06:
-///
-/// - 1 001 238: 1 × 4 with one pin damaged, 36 px tips, no `mm_per_px`,
-///   the end pin bent;
-/// - 910 508: 1 × 3, 39 px tips, the first pin bent (the verdict was
-///   pass).
-#[test]
-fn a_housing_near_the_image_border_still_places_a_few_pins() {
-    for seed in [1_001_238u64, 910_508] {
-        let ins = placed_right(seed);
-        common::assert_note(&ins, "taken from the housing's outline");
-    }
-}
