@@ -9,6 +9,10 @@ use super::grid;
 use super::measure::{BlobMeasure, Roi};
 use super::recipe::PinShape;
 
+/// A blob's area, in nominal tips, that the first look calls tip-like
+/// (with an elongation under 3 and a mask clear of its window).
+pub(crate) const TIP_LIKE_AREA: std::ops::Range<f64> = 0.3..3.0;
+
 /// A measured blob and what it looks like.
 #[derive(Debug, Clone)]
 pub(crate) struct Candidate {

@@ -20,9 +20,9 @@ use super::recipe::Recipe;
 use super::result::*;
 use super::surround::SurroundPlane;
 use super::tip_levels::{
-    BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, area_ratio_of,
-    contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip, neighbour_medians, snr_of,
-    tip_disc_radius,
+    BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, TIP_LIKE_AREA,
+    area_ratio_of, contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip,
+    neighbour_medians, snr_of, tip_disc_radius,
 };
 use super::top_candidates::{
     add_faint_debris, assign_to_positions, faint_pass, last_passes, measure_candidates,
@@ -74,7 +74,7 @@ pub(crate) fn inspect_top_with<P: Px>(
             .into_iter()
             .map(|(m, roi, seed)| {
                 let a = m.area_px / tip_px0;
-                let pinlike = (0.3..3.0).contains(&a) && m.elongation < 3.0 && !m.touches_border;
+                let pinlike = TIP_LIKE_AREA.contains(&a) && m.elongation < 3.0 && !m.touches_border;
                 Candidate {
                     m,
                     pinlike,
@@ -539,7 +539,7 @@ pub(crate) fn inspect_top_with<P: Px>(
                 let m = &cands[ci].m;
                 !cands[ci].pinlike
                     && ((m.x - nx).hypot(m.y - ny) > OFF_HOLE * pin_px
-                        || !super::top_off_hole::AREA.contains(&(m.area_px / tip_px)))
+                        || !TIP_LIKE_AREA.contains(&(m.area_px / tip_px)))
             }) && let Some(mut m) = recut.tip(&cands[ci], (nx, ny))
             {
                 cands[ci].pinlike = true;
@@ -557,8 +557,7 @@ pub(crate) fn inspect_top_with<P: Px>(
         let Some((t_exp, b_exp)) = levels.expected(nx, ny) else {
             continue;
         };
-        let half = (0.9 * pin_px + 2.0).min(0.5 * min_pitch_px);
-        let roi = Roi::around(nx, ny, nx, ny, half, plane.w, plane.h);
+        let roi = Roi::around(nx, ny, nx, ny, recut.half, plane.w, plane.h);
         // A faint tip's half-level mask runs into the window's border
         // through noise: separated from it as the extras are.
         let look = |apart| {

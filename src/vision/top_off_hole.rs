@@ -27,21 +27,19 @@
 use super::gray::{Plane, Px};
 use super::measure::{self, BlobMeasure, Localiser, Roi};
 use super::tip_levels::{
-    Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, contrast_ratio, snr_of,
+    Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, TIP_LIKE_AREA, contrast_ratio, snr_of,
 };
 
 /// The most elongated a re-cut tip may be (an intact tip, even blurred
 /// against its hole's rim, reads under 1.7 on the tuning sets).
 const MAX_ELONGATION: f64 = 2.0;
-/// Its area range, in nominal tips: the first look's for a tip-like blob.
-pub(super) const AREA: std::ops::Range<f64> = 0.3..3.0;
 
 /// What a re-cut is measured with: the part's plane and the second look's
 /// window and levels.
 pub(super) struct Recut<'a, P: Px> {
     pub plane: &'a Plane<'a, P>,
     pub sign: f32,
-    /// Half the window about the cut, px.
+    /// Half the second look's window (about a position, or the cut), px.
     pub half: f64,
     /// The farthest a tip may stand from its position, px.
     pub r_assign: f64,
@@ -78,7 +76,7 @@ impl<P: Px> Recut<'_, P> {
         let (t, b) = self.levels.expected(m.x, m.y)?;
         let tip = !m.touches_border
             && m.elongation < MAX_ELONGATION
-            && AREA.contains(&(m.area_px / self.tip_px))
+            && TIP_LIKE_AREA.contains(&(m.area_px / self.tip_px))
             && contrast_ratio(m.hi, t, b) >= MIN_TIP_CONTRAST
             && snr_of(&m) >= MIN_SNR
             && (m.x - at.0).hypot(m.y - at.1) < self.r_assign;
