@@ -321,7 +321,7 @@ pub(crate) fn measure_pose<P: Px>(
         // blurred edge was no larger than the noise.
         let n_seg = (n_prof / PROFILES_PER_SEGMENT).clamp(4, 10);
         let box_w = ((BOX_PX * 2.0) as usize).max(1);
-        let profs: Vec<(f64, Vec<f64>)> = (0..n_seg)
+        let signed: Vec<(f64, Vec<f64>)> = (0..n_seg)
             .map(|k| {
                 let (a, b) = (k * n_prof / n_seg, (k + 1) * n_prof / n_seg);
                 let m = (b - a) as f64;
@@ -332,22 +332,37 @@ pub(crate) fn measure_pose<P: Px>(
                 (t, box_steps(&prof, box_w))
             })
             .collect();
+        let sig_g = step_noise(&signed, box_w);
+        let profs: Vec<(f64, Vec<f64>)> = signed
+            .into_iter()
+            .map(|(t, g)| (t, g.into_iter().map(f64::abs).collect()))
+            .collect();
         let n_prof = profs.len();
         let mut gmax: Vec<f64> = profs
             .iter()
             .map(|(_, g)| g.iter().cloned().fold(0.0, f64::max))
             .collect();
         let gref = grid::median(&mut gmax).unwrap_or(0.0);
-        // The noise of a step strength: most samples lie on no step, and
-        // the median of |N(0, σ)| is 0.674 σ.
+        // The side's clutter: the typical strength over all its samples,
+        // texture, shading and the edge's flanks included (the median of
+        // |N(0, σ)| would be 0.674 σ were they noise alone). A step counts
+        // as the edge from 0.4 of the side's strongest and 3 × the
+        // clutter, but never above 0.6 of the strongest where the noise
+        // itself is lower: on a short side (a housing's end beside one
+        // row) the edge's flanks fill most of the profile and the clutter
+        // read over the edge itself (Rust 1 150 210), while on a long one
+        // 3 × the clutter keeps out a lesser step further out (a
+        // fixture's edge half as strong, Python 590 271).
         let mut all: Vec<f64> = profs
             .iter()
             .flat_map(|p| p.1.iter().copied())
             .filter(|v| *v > 0.0)
             .collect();
-        let sig_g = grid::median(&mut all).unwrap_or(0.0) / 0.674;
-        let strong = (STRONG_STEP * gref).max(STRONG_SIGMAS * sig_g);
-        let amb = (AMBIGUOUS_STEP * gref).max(AMBIGUOUS_SIGMAS * sig_g);
+        let clutter = grid::median(&mut all).unwrap_or(0.0) / 0.674;
+        let strong = (STRONG_STEP * gref)
+            .max(STRONG_SIGMAS * sig_g)
+            .max((STRONG_SIGMAS * clutter).min(STRONG_CAP * gref));
+        let amb = (AMBIGUOUS_STEP * gref).max(AMBIGUOUS_SIGMAS * clutter);
         let mut n_amb = 0;
         let mut pts = Vec::with_capacity(n_prof);
         for (t, g) in &profs {
@@ -430,9 +445,9 @@ pub(crate) fn measure_pose<P: Px>(
     })
 }
 
-/// Step strength at each sample c = k + 1 of `prof` (k = 0..len − 2): the
-/// difference of the means over `w` samples on either side, c itself left
-/// out (0 where a window leaves the profile).
+/// Signed step strength at each sample c = k + 1 of `prof` (k = 0..len −
+/// 2): the difference of the means over `w` samples on either side, c
+/// itself left out (0 where a window leaves the profile).
 fn box_steps(prof: &[f64], w: usize) -> Vec<f64> {
     let n = prof.len();
     (1..n.saturating_sub(1))
@@ -442,9 +457,28 @@ fn box_steps(prof: &[f64], w: usize) -> Vec<f64> {
             }
             let lo: f64 = prof[c - w..c].iter().sum();
             let hi: f64 = prof[c + 1..=c + w].iter().sum();
-            (hi - lo).abs() / w as f64
+            (hi - lo) / w as f64
         })
         .collect()
+}
+
+/// σ of a segment's step strength, from the differences between
+/// neighbouring segments' signed strengths (`box_steps` with half-width
+/// `w`): along a straight side they see the same edge and independent
+/// noise, so the edge cancels and the median of |difference| is 0.674 √2 σ.
+/// Taken from the strengths themselves, the edge's own flanks filled most
+/// of a short profile and the noise read 3–5 × high, above the edge
+/// (a housing's end beside two or three pins: Rust 1 150 210).
+fn step_noise(segments: &[(f64, Vec<f64>)], w: usize) -> f64 {
+    let mut d: Vec<f64> = segments
+        .windows(2)
+        .flat_map(|p| {
+            let (a, b) = (&p[0].1, &p[1].1);
+            let valid = w.saturating_sub(1)..a.len().saturating_sub(w);
+            valid.map(move |i| (a[i] - b[i]).abs())
+        })
+        .collect();
+    grid::median(&mut d).unwrap_or(0.0) / (0.674 * std::f64::consts::SQRT_2)
 }
 
 /// Offsets across a side (px) whose samples are averaged into one profile
@@ -459,12 +493,17 @@ const BOX_PX: f64 = 3.0;
 
 /// A step counts as the housing's edge from this share of the side's
 /// median strongest step, and from this many σ of the step strength's
-/// noise.
+/// noise and this many times the side's clutter level.
 const STRONG_STEP: f64 = 0.4;
 const STRONG_SIGMAS: f64 = 3.0;
 
+/// The most of the side's median strongest step the clutter may ask of
+/// the edge's step.
+const STRONG_CAP: f64 = 0.6;
+
 /// A step further out than the chosen one makes the choice ambiguous from
-/// this share of the median strongest step and this many σ of the noise.
+/// this share of the median strongest step and this many times the side's
+/// clutter level.
 const AMBIGUOUS_STEP: f64 = 0.25;
 const AMBIGUOUS_SIGMAS: f64 = 2.5;
 
