@@ -103,7 +103,13 @@ fn a_dark_parts_end_tip_is_weighed_against_the_housing_not_the_fixture() {
         941_226u64, 1_000_182, 900_231, 921_069, 921_178, 950_964, 1_130_602, 1_130_757, 1_130_985,
         1_151_298,
     ] {
-        let (_, wrong) = common::envelope_verdict_right(seed);
-        assert_eq!(wrong, 0, "{seed}: {wrong} pin statuses wrong");
+        let (case, r, ins) = common::envelope_case(seed);
+        let c = r.compare(&case.factors, &ins);
+        assert!(c.verdict_ok, "{seed}: {:?}", ins.verdict);
+        assert!(
+            c.status_mismatches.is_empty(),
+            "{seed}: {:?}",
+            c.status_mismatches
+        );
     }
 }
