@@ -10,7 +10,6 @@
 use super::InspectOptions;
 use super::detect::{self, CoarseSearch};
 use super::disc::disc_energy;
-use super::end_level::EndLevels;
 use super::error::VisionError;
 use super::fit::{self, Similarity};
 use super::gray::{ImageInfo, Plane, Px};
@@ -475,14 +474,13 @@ pub(crate) fn inspect_top_with<P: Px>(
     let raised = blurred
         .then(|| SurroundPlane::if_background_raised(&around, bg_at))
         .flatten();
-    warnings.extend(raised.map(|_| super::surround::raised_note()));
-    // At the part's ends the background is pulled toward the fixture.
-    let on = blurred && raised.is_none();
-    let ends = EndLevels::new(on, &nominal, bg_at, &around, min_pitch_px, r_assign);
-    let level_at = |x, y| match raised {
-        Some(p) => p.at(x, y),
-        None => ends.at(x, y).unwrap_or_else(|| bg_at(x, y)),
-    };
+    if raised.is_some() {
+        warnings.push(format!(
+            "the housing's background stood over {:.2} of the tip contrast above the tips' surrounds (a narrow housing beside a brighter fixture): tip energies taken against a plane through the surrounds",
+            super::surround::RAISED
+        ));
+    }
+    let level_at = |x, y| raised.map_or_else(|| bg_at(x, y), |p| p.at(x, y));
     if blurred {
         for &ci in pos_cand.iter().flatten() {
             let m = &mut cands[ci].m;

@@ -86,30 +86,3 @@ fn a_blurred_pin_just_past_the_position_limit_is_not_proven_bent() {
         assert!(why.contains("not proven bent"), "{why}");
     }
 }
-
-/// A good end or corner tip of a dark part on a brighter fixture read
-/// damaged: within half the coarse background's window of the housing's
-/// end the fixture pulls the level its disc energy is taken against (26
-/// DN, 0.29 of the tips' contrast, under its neighbours' on Rust 941 226,
-/// a 2 × 20), and the tip read 1.7 tips. The level at such a position is
-/// now its neighbours' (`end_level`). Cases of the randomised envelope
-/// that read a good tip damaged on 57bac78 — tuning seeds of 2026-12-06
-/// (ten Rust top sets): 941 226, 1 000 182, 900 231, 921 069, 921 178,
-/// 950 964; held-out seeds (the 1 130 000 and 1 150 000 sets, all views,
-/// top-view cases): 1 130 602, 1 130 757, 1 130 985, 1 151 298.
-#[test]
-fn a_dark_parts_end_tip_is_weighed_against_the_housing_not_the_fixture() {
-    for seed in [
-        941_226u64, 1_000_182, 900_231, 921_069, 921_178, 950_964, 1_130_602, 1_130_757, 1_130_985,
-        1_151_298,
-    ] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(c.verdict_ok, "{seed}: {:?}", ins.verdict);
-        assert!(
-            c.status_mismatches.is_empty(),
-            "{seed}: {:?}",
-            c.status_mismatches
-        );
-    }
-}
