@@ -36,6 +36,7 @@ mod blur_model;
 mod blur_tip;
 pub mod detect;
 pub mod disc;
+mod end_level;
 pub mod envelope;
 pub mod error;
 pub mod fit;

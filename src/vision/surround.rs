@@ -25,6 +25,13 @@ use super::grid;
 /// hundredths of the tip contrast.
 pub(crate) const RAISED: f64 = 0.15;
 
+/// The report's note where the plane replaced the coarse background.
+pub(crate) fn raised_note() -> String {
+    format!(
+        "the housing's background stood over {RAISED:.2} of the tip contrast above the tips' surrounds (a narrow housing beside a brighter fixture): tip energies taken against a plane through the surrounds"
+    )
+}
+
 /// `level = a + b (x − x0) + c (y − y0)`, full-resolution pixels, `sign`
 /// space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,7 +94,7 @@ impl SurroundPlane {
     /// Least squares through `pts` (x, y, level). Points on one line (a
     /// one-row part) leave the slope across it undetermined: a small ridge
     /// on the slopes sets it to zero there and changes nothing otherwise.
-    fn fit(pts: &[(f64, f64, f64)]) -> Option<SurroundPlane> {
+    pub(crate) fn fit(pts: &[(f64, f64, f64)]) -> Option<SurroundPlane> {
         let n = pts.len() as f64;
         if n < 1.0 {
             return None;

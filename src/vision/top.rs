@@ -10,6 +10,7 @@
 use super::InspectOptions;
 use super::detect::{self, CoarseSearch};
 use super::disc::disc_energy;
+use super::end_level::DiscLevel;
 use super::error::VisionError;
 use super::fit::{self, Similarity};
 use super::gray::{ImageInfo, Plane, Px};
@@ -18,7 +19,6 @@ use super::housing::find_housing;
 use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
-use super::surround::SurroundPlane;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, TIP_LIKE_AREA,
     area_ratio_of, contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip,
@@ -459,28 +459,28 @@ pub(crate) fn inspect_top_with<P: Px>(
     }
     // Under blur, a tip's energy is taken inside a fixed disc around its
     // centre (`tip_disc_radius`) against the housing's level there (the
-    // coarse background, holes filled: one smooth estimate for every tip),
-    // so that it no longer depends on the half-level mask's extent or on
-    // per-tip levels, both of which noise clumps bias (seventh round,
-    // docs/vision.md).
-    // Where that background was raised toward a bright fixture, a plane
-    // through the tips' own surrounds instead (`surround`).
+    // coarse background, holes filled), not the half-level mask's extent or
+    // per-tip levels, which noise clumps bias (seventh round, docs/vision.md);
+    // a plane through the tips' surrounds where that background was raised
+    // toward a bright fixture (`surround`), and the ends' own (`end_level`).
     let disc_r = tip_disc_radius(recipe.pin_shape, pin_px, blur_sigma, min_pitch_px);
     let around: Vec<_> = assigned
         .iter()
         .map(|&ci| &cands[ci].m)
         .map(|m| (m.x, m.y, m.hi, m.lo))
         .collect();
-    let raised = blurred
-        .then(|| SurroundPlane::if_background_raised(&around, bg_at))
-        .flatten();
-    if raised.is_some() {
-        warnings.push(format!(
-            "the housing's background stood over {:.2} of the tip contrast above the tips' surrounds (a narrow housing beside a brighter fixture): tip energies taken against a plane through the surrounds",
-            super::surround::RAISED
-        ));
-    }
-    let level_at = |x, y| raised.map_or_else(|| bg_at(x, y), |p| p.at(x, y));
+    let at = super::end_level::Positions {
+        nominal: &nominal,
+        own: pos_cand
+            .iter()
+            .map(|c| c.map(|ci| cands[ci].m.lo))
+            .collect(),
+        tips: &around,
+        pitch: min_pitch_px,
+    };
+    let disc_level = DiscLevel::new(blurred, &at, bg_at, r_assign);
+    warnings.extend(disc_level.note());
+    let level_at = |x, y| disc_level.at(x, y).unwrap_or_else(|| bg_at(x, y));
     if blurred {
         for &ci in pos_cand.iter().flatten() {
             let m = &mut cands[ci].m;
