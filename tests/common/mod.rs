@@ -204,6 +204,14 @@ pub fn envelope_verdict_right(seed: u64) -> (pinsight::vision::Inspection, usize
     (ins, c.status_mismatches.len())
 }
 
+/// Asserts every envelope case's verdict and every pin status right.
+pub fn every_status_right(seeds: &[u64]) {
+    for &seed in seeds {
+        let (_, wrong) = envelope_verdict_right(seed);
+        assert_eq!(wrong, 0, "{seed}: {wrong} pin statuses wrong");
+    }
+}
+
 /// Asserts that the inspection's notes (its `warnings`) hold one containing
 /// `needle`: the report says what the inspection did or doubts.
 pub fn assert_note(ins: &pinsight::vision::Inspection, needle: &str) {

@@ -103,16 +103,7 @@ fn a_blurred_pin_just_past_the_position_limit_is_not_proven_bent() {
 /// their surrounds do not agree (docs/vision.md, fortieth round).
 #[test]
 fn a_dark_parts_end_tip_is_weighed_against_the_housing_not_the_fixture() {
-    for seed in [941_226u64, 900_231, 921_178, 950_964, 1_130_602, 1_151_298] {
-        let (case, r, ins) = common::envelope_case(seed);
-        let c = r.compare(&case.factors, &ins);
-        assert!(c.verdict_ok, "{seed}: {:?}", ins.verdict);
-        assert!(
-            c.status_mismatches.is_empty(),
-            "{seed}: {:?}",
-            c.status_mismatches
-        );
-    }
+    common::every_status_right(&[941_226, 900_231, 921_178, 950_964, 1_130_602, 1_151_298]);
 }
 
 /// A damaged corner tip of a dark part read ok: the fixture's pull at the
@@ -121,8 +112,5 @@ fn a_dark_parts_end_tip_is_weighed_against_the_housing_not_the_fixture() {
 /// level is now its neighbours' (`end_level`), and the tip reads damaged.
 #[test]
 fn a_damaged_corner_tip_is_not_made_whole_by_the_fixtures_pull() {
-    for seed in [911_260u64, 970_873] {
-        let (_, wrong) = common::envelope_verdict_right(seed);
-        assert_eq!(wrong, 0, "{seed}: {wrong} pin statuses wrong");
-    }
+    common::every_status_right(&[911_260, 970_873]);
 }

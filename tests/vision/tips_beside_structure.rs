@@ -6,14 +6,6 @@
 
 use crate::common;
 
-/// Asserts every case's verdict and every pin status right.
-fn every_status_right(seeds: &[u64]) {
-    for &seed in seeds {
-        let (_, wrong) = common::envelope_verdict_right(seed);
-        assert_eq!(wrong, 0, "{seed}: {wrong} pin statuses wrong");
-    }
-}
-
 /// A bent tip over its clearance hole's rim or beside the housing's edge:
 /// its first blob ran into its window's border with what it touches, was
 /// not tip-like, and off the position it read as housing by an empty
@@ -29,7 +21,7 @@ fn every_status_right(seeds: &[u64]) {
 /// - 981 201: 2 × 17, dark square tips, vignetting 0.48, blur 2.2 px.
 #[test]
 fn a_bent_tip_touching_what_is_beside_it_reads_bent_not_missing() {
-    every_status_right(&[
+    common::every_status_right(&[
         1_000_780, 900_596, 920_878, 921_317, 960_196, 980_868, 981_201,
     ]);
 }
@@ -45,7 +37,7 @@ fn a_bent_tip_touching_what_is_beside_it_reads_bent_not_missing() {
 ///   read 0.47 of a tip: damaged.
 #[test]
 fn a_tip_whose_first_blob_was_no_tip_size_is_measured_alone() {
-    every_status_right(&[1_141_469, 1_000_253]);
+    common::every_status_right(&[1_141_469, 1_000_253]);
 }
 
 /// A damaged tip of a third of the area, chipped or burred, blurred: under
@@ -55,5 +47,5 @@ fn a_tip_whose_first_blob_was_no_tip_size_is_measured_alone() {
 /// 960 826, 970 927, 940 450, 930 346, 1 000 211, 960 203.
 #[test]
 fn a_small_chipped_tip_reads_damaged_not_missing() {
-    every_status_right(&[960_826, 970_927, 940_450, 930_346, 1_000_211, 960_203]);
+    common::every_status_right(&[960_826, 970_927, 940_450, 930_346, 1_000_211, 960_203]);
 }
