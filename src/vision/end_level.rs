@@ -28,13 +28,14 @@ use super::grid;
 use super::surround::SurroundPlane;
 
 /// A position's background may stand this share of the tips' contrast off
-/// the plane through its neighbours' before the plane replaces it. Inside
+/// the plane through its neighbours' before it is in doubt. Inside
 /// a housing the neighbours agree to a few hundredths (the coarse
 /// background's ripple); at a pulled end they differ by 0.25–0.35.
 pub(crate) const LEVEL_OFF: f64 = 0.1;
 
-/// ... nor less than this many times the background's own scatter about
-/// its neighbours' planes, times the position's plane's spread: along a
+/// The plane alone replaces a position's level only beyond this many times
+/// the background's own scatter about its neighbours' planes, times the
+/// position's plane's spread: along a
 /// noisy one-row part an end's plane, extrapolated from two neighbours,
 /// missed the end's level by a quarter of the tips' contrast (Rust
 /// 960 196, a dark 1 × 7 under σ 12.8 DN at gain 0.63).
@@ -119,15 +120,16 @@ pub(crate) struct Positions<'a> {
 }
 
 impl EndLevels {
-    /// Checks the background `bg_at` at every position where `on`. A position's background is replaced when
-    /// it stands more than [`LEVEL_OFF`] of the tips' contrast off the
-    /// plane through its neighbours' and either that is beyond
-    /// [`SIGMAS`] of the background's own scatter about such planes (the
-    /// plane's level taken), or its own blob's surround, less the
-    /// background's median offset over the tips' surrounds, stands off
-    /// the same way by more than [`OFFSET_OFF`] (that level taken: it
-    /// needs no neighbour beyond the end). Nothing is replaced with fewer
-    /// than three tips or no contrast.
+    /// Checks the background `bg_at` at every position where `on`. A
+    /// position's background is replaced when it stands more than
+    /// [`LEVEL_OFF`] of the tips' contrast off the plane through its
+    /// neighbours' and either that is beyond [`SIGMAS`] of the
+    /// background's own scatter about such planes (the plane's level
+    /// taken), or its own blob's surround plus the background's median
+    /// offset over the tips' surrounds stands off the same way by more
+    /// than [`OFFSET_OFF`] (that level taken: it needs no neighbour beyond
+    /// the end). Nothing is replaced with fewer than three tips or no
+    /// contrast.
     pub fn new(on: bool, at: &Positions, bg_at: impl Fn(f64, f64) -> f32, reach: f64) -> EndLevels {
         let mut out = EndLevels {
             replaced: Vec::new(),
