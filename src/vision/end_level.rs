@@ -21,7 +21,7 @@
 //! position is replaced only when the plane is out of the background's
 //! own scatter about such planes (scaled by each plane's spread at its
 //! position), or when a second witness agrees: the position's own blob's
-//! surround, less the part's median offset between background and
+//! surround, plus the part's median offset between background and
 //! surrounds, standing off the same way (`EndLevels::new`).
 
 use super::grid;
@@ -31,14 +31,14 @@ use super::surround::SurroundPlane;
 /// the plane through its neighbours' before it is in doubt. Inside
 /// a housing the neighbours agree to a few hundredths (the coarse
 /// background's ripple); at a pulled end they differ by 0.25–0.35.
-pub(crate) const LEVEL_OFF: f64 = 0.1;
+const LEVEL_OFF: f64 = 0.1;
 
 /// The plane alone replaces a position's level only beyond this many times
 /// the background's own scatter about its neighbours' planes, times the
-/// position's plane's spread: along a
-/// noisy one-row part an end's plane, extrapolated from two neighbours,
-/// missed the end's level by a quarter of the tips' contrast (Rust
-/// 960 196, a dark 1 × 7 under σ 12.8 DN at gain 0.63).
+/// position's plane's spread: along a noisy one-row part an end's plane,
+/// extrapolated from two neighbours, missed the end's level by a quarter
+/// of the tips' contrast (Rust 960 196, a dark 1 × 7 under σ 12.8 DN at
+/// gain 0.63).
 const SIGMAS: f64 = 3.0;
 
 /// The second witness, for a position off its neighbours' plane by less
@@ -89,7 +89,8 @@ impl DiscLevel {
             .flatten()
         {
             Some(p) => DiscLevel::Raised(p),
-            None => DiscLevel::Ends(EndLevels::new(blurred, at, bg_at, reach)),
+            None if blurred => DiscLevel::Ends(EndLevels::new(at, bg_at, reach)),
+            None => DiscLevel::Ends(EndLevels::default()),
         }
     }
 
@@ -120,8 +121,7 @@ pub(crate) struct Positions<'a> {
 }
 
 impl EndLevels {
-    /// Checks the background `bg_at` at every position where `on`. A
-    /// position's background is replaced when it stands more than
+    /// Checks the background `bg_at` at every position. A position's background is replaced when it stands more than
     /// [`LEVEL_OFF`] of the tips' contrast off the plane through its
     /// neighbours' and either that is beyond [`SIGMAS`] of the
     /// background's own scatter about such planes (the plane's level
@@ -130,7 +130,7 @@ impl EndLevels {
     /// than [`OFFSET_OFF`] (that level taken: it needs no neighbour beyond
     /// the end). Nothing is replaced with fewer than three tips or no
     /// contrast.
-    pub fn new(on: bool, at: &Positions, bg_at: impl Fn(f64, f64) -> f32, reach: f64) -> EndLevels {
+    pub fn new(at: &Positions, bg_at: impl Fn(f64, f64) -> f32, reach: f64) -> EndLevels {
         let mut out = EndLevels {
             replaced: Vec::new(),
             reach,
@@ -138,7 +138,7 @@ impl EndLevels {
         let (tips, pitch) = (at.tips, at.pitch);
         let mut contrast: Vec<f64> = tips.iter().map(|t| (t.2 - t.3) as f64).collect();
         let contrast = grid::median(&mut contrast).unwrap_or(0.0);
-        if !on || tips.len() < 3 || !(contrast > 0.0) || !(pitch > 0.0) {
+        if tips.len() < 3 || !(contrast > 0.0) || !(pitch > 0.0) {
             return out;
         }
         let mut pts: Vec<(f64, f64, f64)> = at
@@ -284,7 +284,7 @@ mod tests {
             tips: &tips,
             pitch: 20.0,
         };
-        EndLevels::new(true, &at, bg, 8.0)
+        EndLevels::new(&at, bg, 8.0)
     }
 
     fn row(n: usize) -> Vec<(f64, f64)> {
