@@ -43,6 +43,7 @@ pub mod fit;
 pub mod gray;
 pub mod grid;
 mod housing;
+mod housing_pose;
 pub mod image_io;
 pub mod lab;
 pub mod label;

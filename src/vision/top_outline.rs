@@ -12,7 +12,7 @@
 use super::fit::{self, RobustFit, Similarity};
 use super::gray::{Plane, Px};
 use super::grid::Lattice;
-use super::housing::measure_pose;
+use super::housing_pose::measure_pose;
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
 /// the grid's pose (four parameters, or three with mm_per_px known): the
