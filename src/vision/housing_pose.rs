@@ -18,6 +18,9 @@ pub(crate) struct HousingPose {
     /// whose two ends were not both measured, the fit's own centre (0):
     /// the pins' ([`measure_pose`]).
     pub centre_mm: (f64, f64),
+    /// Whether only the two long sides were measured (the centre along
+    /// them is then the pins').
+    pub long_sides_only: bool,
 }
 
 impl HousingPose {
@@ -155,7 +158,11 @@ pub(crate) fn measure_pose<P: Px>(
     } else {
         (0.0, across)
     };
-    Some(HousingPose { dtheta, centre_mm })
+    Some(HousingPose {
+        dtheta,
+        centre_mm,
+        long_sides_only: true,
+    })
 }
 
 /// Whether a side's turn `d` (half length `l` mm, at `s` px/mm) is the
@@ -215,6 +222,7 @@ fn four_sides(mut lines: Vec<SideLine>, rect: [f64; 4], s: f64) -> Option<Housin
     Some(HousingPose {
         dtheta,
         centre_mm: (cu, cv),
+        long_sides_only: false,
     })
 }
 

@@ -89,6 +89,7 @@ fn four_sides_give_the_housings_rotation_and_centre() {
         "centre {:?} against {centre:?}",
         pose.centre_mm
     );
+    assert!(!pose.long_sides_only);
 }
 
 #[test]
@@ -128,6 +129,7 @@ fn the_long_sides_alone_give_the_rotation_where_the_ends_leave_the_image() {
         "{pose:?} against {centre:?}"
     );
     assert_eq!(pose.centre_mm.0, 0.0);
+    assert!(pose.long_sides_only);
 }
 
 #[test]

@@ -301,14 +301,11 @@ pub(crate) fn inspect_top_with<P: Px>(
         position_mm: recipe.tolerance.position_mm,
         fixed,
     };
-    let by_housing = outline.for_few_pins(&sim, &model, &image);
-    if let Some(h) = by_housing {
-        sim = h;
-        warnings.push(format!(
-            "{} pins do not over-determine the grid: its rotation and centre taken from the housing's outline",
-            model.len()
-        ));
-    }
+    let by_housing = outline.for_few_pins(&sim, &model, &image).map(|(h, note)| {
+        warnings.push(note);
+        h
+    });
+    sim = by_housing.unwrap_or(sim);
     let mut by_outline = false;
     if by_housing.is_none()
         && let Some(f) = outline.consensus(&sim, &model, &image)
@@ -427,7 +424,11 @@ pub(crate) fn inspect_top_with<P: Px>(
         let tau = recipe.tolerance.position_mm * sim.s;
         if let Some(f) = fit::consensus_similarity(&model, &image, fixed, Some(sim), 0.1, tau) {
             // The housing read once stays the datum if it is not read again.
-            let f = match outline.for_few_pins(&f.sim, &model, &image).or(by_housing) {
+            let f = match outline
+                .for_few_pins(&f.sim, &model, &image)
+                .map(|p| p.0)
+                .or(by_housing)
+            {
                 Some(h) => fit::RobustFit { sim: h, ..f },
                 None => match outline.consensus(&f.sim, &model, &image) {
                     Some(o) => {

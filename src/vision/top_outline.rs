@@ -12,7 +12,7 @@
 use super::fit::{self, RobustFit, Similarity};
 use super::gray::{Plane, Px};
 use super::grid::Lattice;
-use super::housing_pose::measure_pose;
+use super::housing_pose::{HousingPose, measure_pose};
 
 /// Up to this many pins the similarity fit cannot tell one pin's bend from
 /// the grid's pose (four parameters, or three with mm_per_px known): the
@@ -61,33 +61,44 @@ impl<P: Px> Outline<'_, P> {
         Some((corners_px, extent_mm))
     }
 
-    /// The grid on the outline (its rotation and centre, the fit's scale),
-    /// where the outline is measured cleanly and is the part's: turned and
-    /// shifted no more than a bend could move the pins' fit.
-    fn frame(&self, sim: &Similarity) -> Option<Similarity> {
+    /// The outline's pose, where it is measured cleanly and is the part's:
+    /// turned and shifted no more than a bend could move the pins' fit.
+    /// Its `frame` is the grid on the outline (the fit's scale kept).
+    fn pose(&self, sim: &Similarity) -> Option<HousingPose> {
         let (_, rect) = self.rect(sim)?;
         let pose = measure_pose(self.plane, sim, rect, self.half_mm)?;
         let (cu, cv) = pose.centre_mm;
         (pose.dtheta.abs() <= MAX_HOUSING_TURN && cu.hypot(cv) <= 0.3 * self.pin_pitch_min)
-            .then(|| pose.frame(sim))
+            .then_some(pose)
     }
 
     /// For two or three fit points: the grid on the outline, where every
-    /// pin stands near its place on it.
+    /// pin stands near its place on it, and the note that says so.
     pub fn for_few_pins(
         &self,
         sim: &Similarity,
         model: &[(f64, f64)],
         image: &[(f64, f64)],
-    ) -> Option<Similarity> {
+    ) -> Option<(Similarity, String)> {
         if !(2..=FEW_PINS).contains(&model.len()) {
             return None;
         }
-        let h = self.frame(sim)?;
+        let pose = self.pose(sim)?;
+        let h = pose.frame(sim);
         let far = fit::residuals(model, image, &h)
             .iter()
             .any(|&r| r > 0.35 * self.pin_pitch_min * h.s);
-        (!far).then_some(h)
+        let taken = if pose.long_sides_only {
+            "its rotation and centre across the row taken from the housing's outline \
+             (its long sides; along the row, the pins' centre)"
+        } else {
+            "its rotation and centre taken from the housing's outline"
+        };
+        let note = format!(
+            "{} pins do not over-determine the grid: {taken}",
+            model.len()
+        );
+        (!far).then_some((h, note))
     }
 
     /// For 4–16 fit points: the fit to the pins the outline agrees with
@@ -105,7 +116,8 @@ impl<P: Px> Outline<'_, P> {
             return None;
         }
         let tau = self.position_mm * sim.s;
-        let f = fit::consensus_from_seed(model, image, self.fixed, self.frame(sim)?, tau)?;
+        let f =
+            fit::consensus_from_seed(model, image, self.fixed, self.pose(sim)?.frame(sim), tau)?;
         let kept: Vec<bool> = fit::residuals(model, image, sim)
             .iter()
             .map(|&r| r < tau)
