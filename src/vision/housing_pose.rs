@@ -105,14 +105,7 @@ pub(crate) fn measure_pose<P: Px>(
     if !(s > 0.0) || !(rect[1] > rect[0]) || !(rect[3] > rect[2]) {
         return None;
     }
-    let at = |u: f64, v: f64| {
-        let (x, y) = sim.apply(u, v);
-        if x < 0.0 || y < 0.0 || x > (plane.w - 1) as f64 || y > (plane.h - 1) as f64 {
-            f32::NAN
-        } else {
-            plane.bilinear(x, y)
-        }
-    };
+    let at = sampler(plane, sim);
     let side = |normal_u, dir, edge, lo, hi, half| Side {
         normal_u,
         dir,
@@ -163,6 +156,20 @@ pub(crate) fn measure_pose<P: Px>(
         centre_mm,
         long_sides_only: true,
     })
+}
+
+/// The plane sampled at part-frame (u, v) mm through `sim`: bilinear, NaN
+/// off the image (a profile that leaves a tight crop is refused, not
+/// clamped to the border's samples).
+fn sampler<'a, P: Px>(plane: &'a Plane<P>, sim: &'a Similarity) -> impl Fn(f64, f64) -> f32 + 'a {
+    move |u, v| {
+        let (x, y) = sim.apply(u, v);
+        if x < 0.0 || y < 0.0 || x > (plane.w - 1) as f64 || y > (plane.h - 1) as f64 {
+            f32::NAN
+        } else {
+            plane.bilinear(x, y)
+        }
+    }
 }
 
 /// Whether a side's turn `d` (half length `l` mm, at `s` px/mm) is the

@@ -100,15 +100,7 @@ fn the_long_sides_alone_give_the_rotation_where_the_ends_leave_the_image() {
     let (data, sim, centre, dtheta) = pose_scene(w, h);
     let plane = Plane { w, h, data: &data };
     let rect = [-5.2, 4.9, -1.4, 1.6];
-    let at = |u: f64, v: f64| {
-        let (x, y) = sim.apply(u, v);
-        let inside = (0.0..=(w - 1) as f64).contains(&x) && (0.0..=(h - 1) as f64).contains(&y);
-        if inside {
-            plane.bilinear(x, y)
-        } else {
-            f32::NAN
-        }
-    };
+    let at = sampler(&plane, &sim);
     let end = Side {
         normal_u: true,
         dir: 1.0,
@@ -150,15 +142,7 @@ fn two_sides_that_disagree_give_no_pose() {
     }
     let plane = Plane { w, h, data: &data };
     let rect = [-5.2, 4.9, -1.4, 1.6];
-    let at = |u: f64, v: f64| {
-        let (x, y) = sim.apply(u, v);
-        let inside = (0.0..=(w - 1) as f64).contains(&x) && (0.0..=(h - 1) as f64).contains(&y);
-        if inside {
-            plane.bilinear(x, y)
-        } else {
-            f32::NAN
-        }
-    };
+    let at = sampler(&plane, &sim);
     // Each long side is straight on its own; it is their turns that differ.
     let long = |dir: f64, edge: f64| Side {
         normal_u: false,
@@ -188,10 +172,7 @@ fn a_flat_side_has_no_edge() {
         tx: 90.0,
         ty: 70.0,
     };
-    let at = |u: f64, v: f64| {
-        let (x, y) = sim.apply(u, v);
-        plane.bilinear(x, y)
-    };
+    let at = sampler(&plane, &sim);
     let side = Side {
         normal_u: false,
         dir: 1.0,

@@ -116,8 +116,13 @@ impl<P: Px> Outline<'_, P> {
             return None;
         }
         let tau = self.position_mm * sim.s;
-        let f =
-            fit::consensus_from_seed(model, image, self.fixed, self.pose(sim)?.frame(sim), tau)?;
+        // Only a four-sided pose seeds the consensus: with its centre along
+        // the row from the pins, a pose from the long sides kept 4 of 6
+        // good pins each 0.8 of the tolerance off centre, and the grid
+        // refitted to them misplaced the blurred tips' holes by 0.6 px
+        // (`synth_envelope::tests`, seed 7).
+        let pose = self.pose(sim).filter(|p| !p.long_sides_only)?;
+        let f = fit::consensus_from_seed(model, image, self.fixed, pose.frame(sim), tau)?;
         let kept: Vec<bool> = fit::residuals(model, image, sim)
             .iter()
             .map(|&r| r < tau)
