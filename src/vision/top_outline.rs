@@ -64,9 +64,10 @@ impl<P: Px> Outline<'_, P> {
     /// The outline's pose, where it is measured cleanly and is the part's:
     /// turned and shifted no more than a bend could move the pins' fit.
     /// Its `frame` is the grid on the outline (the fit's scale kept).
-    fn pose(&self, sim: &Similarity) -> Option<HousingPose> {
+    /// `long_sides`: whether the two long sides alone may give it.
+    fn pose(&self, sim: &Similarity, long_sides: bool) -> Option<HousingPose> {
         let (_, rect) = self.rect(sim)?;
-        let pose = measure_pose(self.plane, sim, rect, self.half_mm)?;
+        let pose = measure_pose(self.plane, sim, rect, self.half_mm, long_sides)?;
         let (cu, cv) = pose.centre_mm;
         (pose.dtheta.abs() <= MAX_HOUSING_TURN && cu.hypot(cv) <= 0.3 * self.pin_pitch_min)
             .then_some(pose)
@@ -83,11 +84,14 @@ impl<P: Px> Outline<'_, P> {
         if !(2..=FEW_PINS).contains(&model.len()) {
             return None;
         }
-        let pose = self.pose(sim)?;
+        let pose = self.pose(sim, true)?;
         let h = pose.frame(sim);
         let far = fit::residuals(model, image, &h)
             .iter()
             .any(|&r| r > 0.35 * self.pin_pitch_min * h.s);
+        if far {
+            return None;
+        }
         let taken = if pose.long_sides_only {
             "its rotation and centre across the row taken from the housing's outline \
              (its long sides; along the row, the pins' centre)"
@@ -98,7 +102,7 @@ impl<P: Px> Outline<'_, P> {
             "{} pins do not over-determine the grid: {taken}",
             model.len()
         );
-        (!far).then_some((h, note))
+        Some((h, note))
     }
 
     /// For 4–16 fit points: the fit to the pins the outline agrees with
@@ -121,7 +125,7 @@ impl<P: Px> Outline<'_, P> {
         // good pins each 0.8 of the tolerance off centre, and the grid
         // refitted to them misplaced the blurred tips' holes by 0.6 px
         // (`synth_envelope::tests`, seed 7).
-        let pose = self.pose(sim).filter(|p| !p.long_sides_only)?;
+        let pose = self.pose(sim, false)?;
         let f = fit::consensus_from_seed(model, image, self.fixed, pose.frame(sim), tau)?;
         let kept: Vec<bool> = fit::residuals(model, image, sim)
             .iter()
