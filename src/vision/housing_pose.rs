@@ -94,14 +94,12 @@ struct SideLine {
 /// see the fixture's or the mark's step (1 140 704, 1 151 343, 1 130 205).
 /// The long sides alone then hold the rotation a bent pin pulls the
 /// pins' fit to (2.7°–4.1° on those parts), and the along-row centre of
-/// the pins is half a bend along the row at worst; only where
-/// `long_sides` allows it. `None` otherwise.
+/// the pins is half a bend along the row at worst. `None` otherwise.
 pub(crate) fn measure_pose<P: Px>(
     plane: &Plane<P>,
     sim: &Similarity,
     rect: [f64; 4],
     field: (f64, f64),
-    long_sides: bool,
 ) -> Option<HousingPose> {
     let s = sim.s;
     if !(s > 0.0) || !(rect[1] > rect[0]) || !(rect[3] > rect[2]) {
@@ -122,15 +120,10 @@ pub(crate) fn measure_pose<P: Px>(
         side(false, 1.0, rect[3], rect[0], rect[1], field.1),
         side(false, -1.0, rect[2], rect[0], rect[1], field.1),
     ];
-    let mut found = Vec::with_capacity(4);
-    for &d in &sides {
-        let line = measure_side(&at, s, d).ok();
-        // Without the long sides' fallback, the first lost side ends it.
-        if line.is_none() && !long_sides {
-            return None;
-        }
-        found.push(line);
-    }
+    let found: Vec<Option<SideLine>> = sides
+        .iter()
+        .map(|&d| measure_side(&at, s, d).ok())
+        .collect();
     if found.iter().all(Option::is_some) {
         let lines: Vec<SideLine> = found.into_iter().flatten().collect();
         return four_sides(lines, rect, s);

@@ -81,7 +81,7 @@ fn four_sides_give_the_housings_rotation_and_centre() {
     let plane = Plane { w, h, data: &data };
     // The coarse outline a few tenths of a mm off each true side.
     let rect = [-5.2, 4.9, -1.4, 1.6];
-    let pose = measure_pose(&plane, &sim, rect, (4.0, 0.5), true).expect("a pose");
+    let pose = measure_pose(&plane, &sim, rect, (4.0, 0.5)).expect("a pose");
     assert!((pose.dtheta - dtheta).abs() < 0.002, "{pose:?}");
     let err = (pose.centre_mm.0 - centre.0).hypot(pose.centre_mm.1 - centre.1);
     assert!(
@@ -113,7 +113,7 @@ fn the_long_sides_alone_give_the_rotation_where_the_ends_leave_the_image() {
         measure_side(&at, sim.s, end).err(),
         Some(SideFail::LeavesImage)
     );
-    let pose = measure_pose(&plane, &sim, rect, (4.0, 0.5), true).expect("a pose from two sides");
+    let pose = measure_pose(&plane, &sim, rect, (4.0, 0.5)).expect("a pose from two sides");
     assert!((pose.dtheta - dtheta).abs() < 0.002, "{pose:?}");
     // Across the long sides the housing's centre; along them the fit's.
     assert!(
@@ -155,7 +155,7 @@ fn two_sides_that_disagree_give_no_pose() {
     let top = measure_side(&at, sim.s, long(-1.0, rect[2])).expect("the top side");
     let bottom = measure_side(&at, sim.s, long(1.0, rect[3])).expect("the bottom side");
     assert!(bottom.dtheta - top.dtheta > 0.05, "{top:?} {bottom:?}");
-    assert_eq!(measure_pose(&plane, &sim, rect, (4.0, 0.5), true), None);
+    assert_eq!(measure_pose(&plane, &sim, rect, (4.0, 0.5)), None);
 }
 
 #[test]
