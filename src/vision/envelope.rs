@@ -158,9 +158,9 @@ mod tests {
     use super::*;
     use crate::vision::{self, InspectOptions, synth_envelope::EnvelopeCase};
 
-    #[test]
-    fn an_inspection_inside_the_envelope_has_no_note_and_a_shrunk_one_does() {
-        let case = EnvelopeCase::draw(3);
+    /// Envelope case `seed`, rendered and inspected.
+    fn inspected(seed: u64) -> (EnvelopeCase, super::super::Inspection) {
+        let case = EnvelopeCase::draw(seed);
         let r = case.render().unwrap();
         let ins = vision::inspect_gray(
             &case.recipe,
@@ -169,6 +169,12 @@ mod tests {
             &InspectOptions::default(),
         )
         .unwrap();
+        (case, ins)
+    }
+
+    #[test]
+    fn an_inspection_inside_the_envelope_has_no_note_and_a_shrunk_one_does() {
+        let (_, ins) = inspected(3);
         assert!(notes(&ins).is_empty(), "{:?}", notes(&ins));
         let mut out = ins.clone();
         out.grid.mm_per_px = 0.2;
@@ -191,18 +197,7 @@ mod tests {
     /// verdict is in doubt. A case read at its true scale has no such note.
     #[test]
     fn a_part_read_mostly_missing_at_an_estimated_scale_is_noted() {
-        let inspect = |seed: u64| {
-            let case = EnvelopeCase::draw(seed);
-            let r = case.render().unwrap();
-            vision::inspect_gray(
-                &case.recipe,
-                &r.gray,
-                r.info.clone(),
-                &InspectOptions::default(),
-            )
-            .unwrap()
-        };
-        let ins = inspect(1_090_335);
+        let (_, ins) = inspected(1_090_335);
         assert!(ins.grid.mm_per_px_estimated);
         let n = notes(&ins);
         assert!(
@@ -223,16 +218,8 @@ mod tests {
     /// same inspection with the scale given by the recipe does not.
     #[test]
     fn a_short_row_at_an_estimated_scale_says_a_bend_along_it_may_pass() {
-        let case = EnvelopeCase::draw(1_191_074);
+        let (case, ins) = inspected(1_191_074);
         assert_eq!((case.recipe.rows, case.recipe.cols), (1, 3));
-        let r = case.render().unwrap();
-        let ins = vision::inspect_gray(
-            &case.recipe,
-            &r.gray,
-            r.info.clone(),
-            &InspectOptions::default(),
-        )
-        .unwrap();
         assert!(ins.grid.mm_per_px_estimated);
         assert!(
             ins.warnings
