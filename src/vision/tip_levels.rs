@@ -163,17 +163,31 @@ pub(crate) fn housing_not_tip(
     let rho = levels
         .expected(m.x, m.y)
         .map(|(t, b)| contrast_ratio(m.hi, t, b))?;
-    (!c.pinlike && rho < DIM_TIP_MIN_LEVEL).then(|| {
+    let area = m.area_px / tip_px;
+    let floor = if area > HOUSING_RING_AREA {
+        MIN_TIP_CONTRAST
+    } else {
+        DIM_TIP_MIN_LEVEL
+    };
+    (!c.pinlike && rho < floor).then(|| {
         (
             rho,
             format!(
-                "no tip at the position: the blob there is not tip-like (area {:.2} × nominal, elongation {:.1}) and reaches only {rho:.2} of the local tip level (a tip, even a damaged one, reaches ≥ {DIM_TIP_MIN_LEVEL}): the housing around an empty hole",
-                m.area_px / tip_px,
+                "no tip at the position: the blob there is not tip-like (area {area:.2} × nominal, elongation {:.1}) and reaches only {rho:.2} of the local tip level (a tip, even a damaged one, reaches ≥ {floor}): the housing around an empty hole",
                 m.elongation
             ),
         )
     })
 }
+
+/// [`housing_not_tip`]: a blob of more than this many nominal tip areas is
+/// held to the tip-bright level ([`MIN_TIP_CONTRAST`]) rather than
+/// [`DIM_TIP_MIN_LEVEL`]. Blur lowers the peak of a tip smaller than the
+/// blur, not of one larger than nominal: a damaged tip drawn large (at
+/// most 2.25 × the area) keeps a tip's level, while the housing ring
+/// around an empty hole at its true scale runs to many tip areas (Rust
+/// 955 323 at a 29.7 px tip: 8.8 × the area, 0.23 of the tip level).
+pub(crate) const HOUSING_RING_AREA: f64 = 3.0;
 
 /// A blob assigned to a position that is not tip-like (area, elongation)
 /// and lies more than this many tip widths from it is outside the tip's
