@@ -154,3 +154,35 @@ fn a_bent_pin_of_two_is_seen_against_the_housing_block() {
         }
     }
 }
+
+/// Rows of four to seven pins at an estimated scale (held-out Rust
+/// 1 110 000 – 1 170 000, read before the change): a pin bent along the
+/// row, or a row whose heights all read 1–1.3 tolerances high or low. The
+/// plain least-squares scale followed the bent pin by 1–8 %, the robust
+/// fit started from it kept the bend (its residual shrank into the good
+/// pins' spread), and every height, measured in px and turned into mm at
+/// that scale, moved with it. The robust fit now starts from the repeated
+/// median (`side_row::robust_offset_scale`): 1 110 708 (1 × 5, end pin
+/// bent, two heights read high), 1 131 389 (1 × 6, heights high),
+/// 1 151 090 (1 × 8, a bent pin read ok and a good one bent), 1 170 545
+/// (1 × 6, two good heights read short), 1 171 062 (1 × 6, two good pins
+/// read bent).
+#[test]
+fn a_pin_bent_along_a_short_row_does_not_set_the_estimated_scale() {
+    for seed in [1_110_708u64, 1_131_389, 1_151_090, 1_170_545, 1_171_062] {
+        let (case, r, ins) = common::envelope_case(seed);
+        assert!(case.recipe.mm_per_px.is_none(), "{seed}: scale estimated");
+        let c = r.compare(&case.factors, &ins);
+        assert!(c.verdict_ok, "{seed}: verdict {:?}", ins.verdict);
+        assert!(
+            c.status_mismatches.is_empty(),
+            "{seed}: {:?}",
+            c.status_mismatches
+        );
+        let ratio = ins.grid.mm_per_px / case.factors.mm_per_px;
+        assert!(
+            (ratio - 1.0).abs() < 0.002,
+            "{seed}: scale {ratio:.4} × truth"
+        );
+    }
+}
