@@ -26,9 +26,8 @@ use super::recipe::Recipe;
 use super::scale::{TipBlob, W_MIN, area_of_width, tip_blobs, width_of_area};
 
 /// How many of the strongest blobs over the ladder are measured before
-/// giving up (a glint or a speck of debris may stand above the tip, and a
-/// round blob is measured again at another width).
-const MAX_TRIED: usize = 6;
+/// giving up (a glint or a speck of debris may stand above the tip).
+const MAX_TRIED: usize = 4;
 
 /// The tip width in px from the one strongest whole tip, or `None` when no
 /// blob measures as a whole tip.
@@ -50,18 +49,16 @@ pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> 
         w /= 1.2;
     }
     best.sort_by(|a, b| b.1.3.total_cmp(&a.1.3));
-    // Blobs ruled out as no tip (elongated), not to be tried again.
     let mut seen: Vec<(f64, f64)> = Vec::new();
-    let mut tried = 0;
     for (w, (x, y, _, _, bx)) in best {
         // The same blob found at the next width is not a second try.
         if seen.iter().any(|p| (p.0 - x).hypot(p.1 - y) < 0.5 * w) {
             continue;
         }
-        if tried == MAX_TRIED {
+        if seen.len() == MAX_TRIED {
             break;
         }
-        tried += 1;
+        seen.push((x, y));
         let (margin, dilate) = measure::tip_window(w);
         let roi = Roi::around(bx[0], bx[1], bx[2], bx[3], margin, plane.w, plane.h);
         let Some(m) =
@@ -69,16 +66,8 @@ pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> 
         else {
             continue;
         };
-        if m.elongation >= 3.0 {
-            seen.push((x, y));
-            continue;
-        }
-        // A round blob cut by its window, or of an area the width it was
-        // found at does not imply, may be the tip found at a width far from
-        // its own (Rust 1 200 219: a 17.7 px tip first found at 3.9 and
-        // 11.6 px): it is measured again where the ladder finds it next.
         let r = m.area_px / area_of_width(w, recipe.pin_shape);
-        if !m.touches_border && (0.5..=2.0).contains(&r) {
+        if !m.touches_border && m.elongation < 3.0 && (0.5..=2.0).contains(&r) {
             return Some(width_of_area(m.area_px, recipe.pin_shape));
         }
     }
