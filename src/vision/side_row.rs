@@ -199,13 +199,13 @@ pub(super) fn robust_offset_scale(
     };
     // Start from the median offset, or with a free scale from Siegel's
     // repeated median (the plain fit with three or fewer pins).
-    let (mut a, mut b) = match fixed_b {
+    let b0 = match fixed_b {
+        Some(b) => Some(b),
+        None if k >= REPEATED_MEDIAN_FROM => Some(repeated_median_slope(n, u)?),
+        None => None,
+    };
+    let (mut a, mut b) = match b0 {
         Some(b) => {
-            let mut d: Vec<f64> = n.iter().zip(u).map(|(n, u)| u - b * n).collect();
-            (grid::median(&mut d)?, b)
-        }
-        None if k >= REPEATED_MEDIAN_FROM => {
-            let b = repeated_median_slope(n, u)?;
             let mut d: Vec<f64> = n.iter().zip(u).map(|(n, u)| u - b * n).collect();
             (grid::median(&mut d)?, b)
         }
