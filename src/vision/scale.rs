@@ -387,15 +387,20 @@ pub fn estimate<P: Px>(
     };
     Ok(match held {
         Held::Pitch => e,
-        // A lattice of two or three pitches held by a tenth of the pairs
+        // A lattice of two or three pitches held by a fifth of the pairs
         // the part can show is no evidence against the period's: Rust
         // 1 030 443 (2 × 14, 27 pairs; noise 13 DN on a 0.33 contrast)
         // held 35.8 px on one pair where the period read 31.40 px (truth
-        // 31.40) and every pin was judged on the wrong grid. A 1 × 3 or
-        // 2 × 3 part with pins missing may show one pair only, and there
-        // the pair holds (Rust 980 696, 901 293).
+        // 31.40), and 1 221 068 (1 × 16 with a skip, 13 pairs; contrast
+        // 0.44 at gain 0.63, σ 11 DN, blur 2.3 px) 21.8 px on one pair
+        // of noise blobs where the period read 32.46 px (truth 32.50):
+        // every pin was judged on the wrong grid, or none found. A 1 × 3
+        // or 2 × 3 part with pins missing may show one pair only, and
+        // there the pair holds (Rust 980 696, 901 293).
         Held::Multiple => period()
-            .filter(|p| divides(p.pitch_px, e.pitch_px) || 10 * e.support < most_matched(recipe))
+            .filter(|p| {
+                divides(p.pitch_px, e.pitch_px) || HELD_SHARE * e.support < most_matched(recipe)
+            })
             .unwrap_or(e),
         Held::No => period().unwrap_or(e),
     })
@@ -437,6 +442,11 @@ fn divides(fine: f64, coarse: f64) -> bool {
         .iter()
         .any(|m| (coarse / fine / m - 1.0).abs() < 0.1)
 }
+
+/// A lattice held at two or three pitches by fewer than one in this many
+/// of the pairs the part can show gives way to the pins' periodicity
+/// ([`estimate`]).
+const HELD_SHARE: usize = 5;
 
 /// How the lattice a pass chose was checked ([`tips_hold`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -137,6 +137,24 @@ fn a_lattice_of_two_pitches_held_by_one_pair_gives_way_to_the_period() {
     assert!(c.status_mismatches.len() <= 4, "{:?}", c.status_mismatches);
 }
 
+/// Rust 1 221 068 (1 × 16 with a skipped position, mm_per_px absent,
+/// contrast 0.44 at gain 0.63 under σ 11 DN, blur 2.3 px on 7.4 px tips):
+/// the ladder held a lattice of two pitches on one pair of noise blobs,
+/// 21.8 px against the truth's 32.5, and no pin was found on its grid
+/// (an error). The part can show 13 pairs, so the one pair was more than
+/// a tenth of them; a lattice of several pitches held by fewer than a
+/// fifth now gives way to the period (32.46 px).
+#[test]
+fn a_lattice_of_two_pitches_held_by_one_pair_of_thirteen_gives_way_to_the_period() {
+    let (case, r, ins) = common::envelope_case(1_221_068);
+    assert!(ins.grid.mm_per_px_estimated);
+    assert_scale_within(&case, &ins, 0.005);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    // The one left is the bent pin, read missing under the noise.
+    assert!(c.status_mismatches.len() <= 1, "{:?}", c.status_mismatches);
+}
+
 /// Rust 910 811: a 2 × 6 dark part, tips 6.8 px, in a 1759 × 2463 frame
 /// of textured fixture under almost no noise (σ 2 DN, mm_per_px absent).
 /// At the tips' width the scale's ladder found 2055 texture blobs beside
