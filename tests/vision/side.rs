@@ -186,3 +186,18 @@ fn a_pin_bent_along_a_short_row_does_not_set_the_estimated_scale() {
         );
     }
 }
+
+/// A good 1 × 15 side view under blur 2.45 px on 6.7 px pins, σ 15 DN on
+/// 12 bits (Rust 1 220 454): two pins' blobs broke up at the coarse
+/// threshold, and the second look's mean profile across each (a plain
+/// bar, 1 400 DN over the backlight) had its steepest rise and fall three
+/// samples apart, with no sample two inside both; the bar was dropped
+/// and both good pins read missing. `side_row::bar_edges` now takes the
+/// bar's level from the peak there.
+#[test]
+fn a_blurred_pin_whose_steepest_edges_lie_three_samples_apart_is_found() {
+    let (case, r, ins) = common::envelope_case(1_220_454);
+    let c = r.compare(&case.factors, &ins);
+    assert!(c.verdict_ok, "verdict {:?}", ins.verdict);
+    assert!(c.status_mismatches.is_empty(), "{:?}", c.status_mismatches);
+}
