@@ -350,6 +350,7 @@ fn inspect_side_runs<P: Px>(
             gap: (gap_l, gap_r),
             margin,
             tip_half: 2.0 * kf + 4.0,
+            on_position: false,
         };
         if let Some(e) = measure_bar(plane, sign, &line, &win) {
             ends.push(e);

@@ -34,6 +34,10 @@ pub(super) struct BarWindow {
     pub margin: f64,
     /// Half-width of the end's search window around `tip_guess`, px.
     pub tip_half: f64,
+    /// Whether the row's lattice puts a pin here (the second look): a bar
+    /// narrowed by blur is then measured from its peak
+    /// ([`bar_edges`]).
+    pub on_position: bool,
 }
 
 /// Measures the bar in `win` standing on the housing edge `line`.
@@ -82,15 +86,13 @@ pub(super) fn measure_bar<P: Px>(
     };
     let ymid = (ya + yb) / 2;
     let whole = mean_prof(ya, yb);
-    let (l, r) = bar_edges(&whole)?;
+    let edges = |prof: &[f32]| bar_edges(prof, win.on_position);
+    let (l, r) = edges(&whole)?;
     let contrast = bar_contrast(&whole, l, r);
     let mx = xa as f64 + 0.5 * (l + r);
     // Centres of the halves, at their mean rows, relative to the
     // perpendicular through the whole bar's centre.
-    let halves = (
-        bar_edges(&mean_prof(ya, ymid)),
-        bar_edges(&mean_prof(ymid, yb)),
-    );
+    let halves = (edges(&mean_prof(ya, ymid)), edges(&mean_prof(ymid, yb)));
     let both_halves = halves.0.is_some() && halves.1.is_some();
     let lean = lean_of(
         halves.0.map(|(a, b)| 0.5 * (a + b)),
@@ -250,6 +252,7 @@ pub(super) fn look_again<P: Px>(
         gap: (xc - 0.5 * pitch_px, xc + 0.5 * pitch_px),
         margin: hw.max(9.0),
         tip_half: row.tip_half.min(0.25 * h_nom_px),
+        on_position: true,
     };
     let e = measure_bar(plane, sign, line, &win)?;
     let w_ok = e.width_px >= 0.5 * row.width_px && e.width_px <= 1.6 * row.width_px;

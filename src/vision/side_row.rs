@@ -59,7 +59,13 @@ pub(super) fn median_f32(v: &mut [f32]) -> f32 {
 /// bar high): each edge is placed halfway between the bar's interior level
 /// and the background level on its own side, so uneven backlight does not
 /// shift the centre. Returns fractional indices (left, right).
-pub(super) fn bar_edges(prof: &[f32]) -> Option<(f64, f64)> {
+///
+/// Where `narrow`, also of a bar whose steepest rise and fall lie only
+/// 2–3 samples apart, its level then read from the peak. Only where the
+/// row's lattice puts a pin (`side_bar::look_again`): anywhere, a noise
+/// clump under a vignetted backlight passes so and made a "pin-like bar"
+/// no position claims (Rust 1 150 141).
+pub(super) fn bar_edges(prof: &[f32], narrow: bool) -> Option<(f64, f64)> {
     let n = prof.len();
     if n < 12 {
         return None;
@@ -85,7 +91,7 @@ pub(super) fn bar_edges(prof: &[f32]) -> Option<(f64, f64)> {
     let past = |i: usize| prof[i] >= 0.5 * (prof[i - 1] + prof[i + 1]);
     let l0 = if past(sl) { sl } else { sl + 1 };
     let r0 = if past(sr) { sr } else { sr - 1 };
-    if r0 < l0 + 2 || l0 < 5 || r0 + 5 >= n {
+    if r0 < l0 + if narrow { 2 } else { 4 } || l0 < 5 || r0 + 5 >= n {
         return None;
     }
     // The bar's level: its samples two or more inside both steepest
@@ -529,7 +535,7 @@ mod tests {
         {
             prof[31 + i] = v;
         }
-        let (l, r) = super::bar_edges(&prof).expect("both edges");
+        let (l, r) = super::bar_edges(&prof, false).expect("both edges");
         assert!((l - 19.5).abs() < 1e-9, "{l}");
         assert!((r - 35.0).abs() < 1e-9, "{r}");
     }
@@ -537,14 +543,18 @@ mod tests {
     /// A blurred bar whose steepest rise (index 10) and fall (15) snap
     /// inwards to 11 and 14, three samples apart: no sample lies two
     /// inside both, and the bar was dropped (Rust 1 220 454, two good
-    /// pins read missing). Its level is the peak's (100) over a
-    /// background of 0; the half level 50 is crossed at 10 + 20/50 and
+    /// pins read missing). Where the lattice puts a pin, its level is the
+    /// peak's (100) over a background of 0; the half level 50 is crossed at 10 + 20/50 and
     /// 14 + 40/50.
     #[test]
     fn a_bar_whose_steepest_points_are_three_samples_apart_keeps_its_edges() {
         let mut prof = vec![0f32; 27];
         prof[9..18].copy_from_slice(&[10.0, 30.0, 80.0, 95.0, 100.0, 90.0, 40.0, 20.0, 10.0]);
-        let (l, r) = super::bar_edges(&prof).expect("both edges");
+        assert!(
+            super::bar_edges(&prof, false).is_none(),
+            "no room inside the edges"
+        );
+        let (l, r) = super::bar_edges(&prof, true).expect("both edges");
         assert!((l - 10.4).abs() < 1e-6, "{l}");
         assert!((r - 14.8).abs() < 1e-6, "{r}");
     }
@@ -584,7 +594,7 @@ mod tests {
                 bg + cov * (-140.0 - bg)
             })
             .collect();
-        let (l, r) = super::bar_edges(&prof).unwrap();
+        let (l, r) = super::bar_edges(&prof, false).unwrap();
         assert!(
             (l - 20.0).abs() < 1e-3 && (r - 31.0).abs() < 1e-3,
             "{l} {r}"
