@@ -764,7 +764,6 @@ pub(crate) fn inspect_top_with<P: Px>(
             levels: &levels,
             sim: &sim,
             rect,
-            outline_found: housing.is_some(),
             pitch_mm: px_mm,
             coarse: &cs,
             grid: grown(0.4 * px_mm.min(py_mm)),

@@ -34,8 +34,6 @@ pub(super) struct Leftovers<'a, P: Px> {
     pub sim: &'a Similarity,
     /// The housing (or the grid grown by half a pitch) in the part frame, mm.
     pub rect: [f64; 4],
-    /// Whether `rect` is the housing's outline, found (not the stand-in).
-    pub outline_found: bool,
     pub pitch_mm: f64,
     /// The coarse search, whose image the fixture pass reads.
     pub coarse: &'a CoarseSearch,
@@ -392,7 +390,7 @@ fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut 
         else {
             continue;
         };
-        if lo.sign < 0.0 && (on_dark_band(lo, &sh, (t, b), core_px) || within_housing(lo, &sh)) {
+        if lo.sign < 0.0 && on_dark_band(lo, &sh, (t, b), core_px) {
             continue;
         }
         if far(sh.x, sh.y) && sh.rise >= FIXTURE_SIGMAS * sh.noise && lo.within_rule(rule, &sh) {
@@ -425,24 +423,6 @@ fn on_dark_band<P: Px>(
     // envelope's middle and only sets how far out the ridge is read.
     lo.ridge_at((sh.x, sh.y), sh.area_px, 1.0, (t, b))
         .is_some_and(|r| core - CORE_SIGMAS * core_sd - r < MIN_LOCAL_CONTRAST)
-}
-
-/// Whether a protrusion the fixture pass found on a dark part has its
-/// centre a tip width or more inside the housing's found outline: the
-/// housing itself, not debris on the fixture. The pass looks beyond 0.4
-/// of the smaller pitch from the outer tips, and where the housing's
-/// margin along the row is wider (up to 0.7 of the larger pitch), its end
-/// and chamfer band stand there above a bright fixture; at an end rounded
-/// with a radius near the housing's half height the band is no straight
-/// ridge ([`on_dark_band`]), and it was counted (Rust 1 220 354: a 1 × 16
-/// at pitches 3.0 × 2.25 mm, "debris" of 4.2 tips 1.4 tip widths inside
-/// the outline's end). Debris across the housing's edge is measured by
-/// its protrusion onto the fixture, outside the outline.
-fn within_housing<P: Px>(lo: &Leftovers<'_, P>, sh: &Shoulder) -> bool {
-    let (u, v) = lo.sim.inverse(sh.x, sh.y);
-    let r = lo.rect;
-    let depth = (u - r[0]).min(r[1] - u).min(v - r[2]).min(r[3] - v);
-    lo.outline_found && depth * lo.sim.s >= lo.pin_px()
 }
 
 /// A blob set aside as part of, or a ripple of, a brighter structure,

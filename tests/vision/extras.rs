@@ -53,22 +53,6 @@ fn a_dark_parts_chamfer_band_in_a_vignetted_corner_is_no_debris() {
     }
 }
 
-/// A good dark 1 × 16 (pitches 3.0 × 2.25 mm, Rust 1 220 354) beside a
-/// bright fixture, its housing's ends rounded with a radius near its half
-/// height: the fixture pass looks beyond 0.4 of the smaller pitch from the
-/// outer tips, where the housing's end (0.6 of the larger pitch out) and
-/// its chamfer band still stand, and the band's curve is no straight
-/// ridge. A piece of it, 4.2 tips in area with its centre 1.4 tip widths
-/// inside the housing's outline, was counted as debris. What the fixture
-/// pass finds a tip width or more inside the found outline is housing.
-#[test]
-fn a_dark_parts_rounded_housing_end_is_no_debris_on_the_fixture() {
-    let (ok, found, truth, what) = judge(1_220_354);
-    assert_eq!(truth, 0, "the generator drew no debris");
-    assert_eq!(found, 0, "spurious debris: {what:?}");
-    assert!(ok);
-}
-
 /// Debris across the housing's edge where the fixture beside it is nearly
 /// as bright as the debris itself: its half-level mask runs into the
 /// fixture (870 327: "part of a larger structure"), or, cut at the saddle,
