@@ -544,8 +544,8 @@ mod tests {
     /// inwards to 11 and 14, three samples apart: no sample lies two
     /// inside both, and the bar was dropped (Rust 1 220 454, two good
     /// pins read missing). Where the lattice puts a pin, its level is the
-    /// peak's (100) over a background of 0; the half level 50 is crossed at 10 + 20/50 and
-    /// 14 + 40/50.
+    /// peak's (100) over a background of 0; the half level 50 is crossed
+    /// at 10 + 20/50 and 14 + 40/50.
     #[test]
     fn a_bar_whose_steepest_points_are_three_samples_apart_keeps_its_edges() {
         let mut prof = vec![0f32; 27];

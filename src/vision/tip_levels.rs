@@ -134,9 +134,10 @@ pub(crate) const DIM_TIP_MIN_LEVEL: f64 = 0.2;
 /// above a tip-bright blob's ([`MIN_SNR`]). Twice that (10 σ) left small
 /// damaged tips under blur 2–2.3 px, at 5.5–8 σ, read missing: 6–8 of the
 /// 50–60 status errors a set on the held-out sets of 2026-12-07 (the
-/// largest class on two of the three). At 6 σ, five more statuses are right on the ten Rust
-/// top sets and five on the top views of 1 220 000–1 240 000, and no
-/// status is lost on either (no empty position reads damaged).
+/// largest class on two of the three). At 6 σ, five more statuses are
+/// right on the ten Rust top sets and five on the top views of
+/// 1 220 000–1 240 000, and no status is lost on either (no empty
+/// position reads damaged).
 pub(crate) const DIM_TIP_MIN_SNR: f64 = 1.2 * MIN_SNR;
 /// ... the farthest from the position, in tip widths.
 pub(crate) const DIM_TIP_ON_POSITION: f64 = 0.5;
