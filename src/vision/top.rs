@@ -19,6 +19,7 @@ use super::housing::find_housing;
 use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
+use super::scale_one_tip::ScaleStart;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, TIP_LIKE_AREA,
     area_ratio_of, contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip,
@@ -30,7 +31,7 @@ use super::top_candidates::{
 };
 use super::top_first_fit::FitPoints;
 use super::top_not_proven;
-use super::top_outline::{FEW_PINS, Outline, chosen_note};
+use super::top_outline::{Outline, chosen_note};
 
 /// Inspects one top-view image.
 pub fn inspect_top<P: Px>(
@@ -40,26 +41,26 @@ pub fn inspect_top<P: Px>(
     full_scale: f32,
     opts: &InspectOptions,
 ) -> Result<Inspection, VisionError> {
-    inspect_top_with(recipe, plane, info, full_scale, opts, false)
+    inspect_top_with(recipe, plane, info, full_scale, opts, ScaleStart::Search)
 }
 
-/// [`inspect_top`], where `one_tip_scale` lets a single tip found on a
-/// part of a few positions give the scale by its area (the last resort of
-/// `scale_one_tip`, after the search at one tip's width).
+/// [`inspect_top`], the scale (when the recipe has no `mm_per_px`) started
+/// as `start` says.
 pub(crate) fn inspect_top_with<P: Px>(
     recipe: &Recipe,
     plane: &Plane<P>,
     info: ImageInfo,
     full_scale: f32,
     opts: &InspectOptions,
-    one_tip_scale: bool,
+    start: ScaleStart,
 ) -> Result<Inspection, VisionError> {
     let sign = recipe.polarity.sign();
     let part = recipe.part_number.clone();
     let mut warnings = Vec::new();
-    let (pin_px0, estimate) = match recipe.mm_per_px {
-        Some(m) => (recipe.pin_mm / m, None),
-        None => {
+    let (pin_px0, estimate) = match (recipe.mm_per_px, start) {
+        (Some(m), _) => (recipe.pin_mm / m, None),
+        (None, ScaleStart::TipWidth(w)) => (w, None),
+        (None, _) => {
             let e = super::scale::estimate(plane, sign, recipe, full_scale)?;
             (e.pin_px, Some(e))
         }
@@ -257,8 +258,8 @@ pub(crate) fn inspect_top_with<P: Px>(
         .enumerate()
         .filter_map(|(ci, i)| i.as_ref().and_then(in_window).map(|rc| (ci, rc)))
         .collect();
-    let few = if one_tip_scale { FEW_PINS + 1 } else { 0 };
-    let points = FitPoints::of(&cands, &in_win, recipe, tip_px0, few);
+    let one_tip = start == ScaleStart::SearchOrOneTip;
+    let points = FitPoints::of(&cands, &in_win, recipe, tip_px0, one_tip);
     let fixed = recipe.mm_per_px.map(|_| s0);
     let lat_s = lat.px / px_mm;
     let centre_lat = (

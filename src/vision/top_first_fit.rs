@@ -5,6 +5,7 @@ use super::fit::{self, Similarity};
 use super::grid;
 use super::recipe::Recipe;
 use super::tip_levels::Candidate;
+use super::top_outline::FEW_PINS;
 
 /// The fewest tips in the window whose median area is the reference for a
 /// whole tip: on a 2 × 2 with one tip damaged and one bent (Rust 960 554)
@@ -33,8 +34,8 @@ impl FitPoints {
     /// that three tips fell outside their positions' reach and were
     /// counted as debris.
     ///
-    /// One tip found is the scale's last resort only on a part of at most
-    /// `few` positions: one tip of many found says the others went unseen
+    /// One tip found is the scale's last resort (`one_tip`) only on a part
+    /// of at most [`FEW_PINS`] + 1 positions: one tip of many found says the others went unseen
     /// more likely than missing (Rust 925 446, a 2 × 17 under σ 16 DN
     /// noise, stays an error that says so).
     pub fn of(
@@ -42,7 +43,7 @@ impl FitPoints {
         in_win: &[(usize, (u32, u32))],
         recipe: &Recipe,
         tip_px0: f64,
-        few: usize,
+        one_tip: bool,
     ) -> Self {
         let [ta_lo, ta_hi] = recipe.tip_area();
         let mut areas: Vec<f64> = in_win.iter().map(|&(ci, _)| cands[ci].m.area_px).collect();
@@ -68,7 +69,7 @@ impl FitPoints {
         if model.len() < 2 {
             (model, image, area) = (model_all, image_all, area_all);
         }
-        let few_positions = recipe.positions().len() <= few;
+        let few_positions = one_tip && recipe.positions().len() <= FEW_PINS + 1;
         let one_area = (area.len() == 1 && few_positions).then(|| area[0]);
         FitPoints {
             model,

@@ -237,3 +237,20 @@ fn an_empty_holes_ring_many_tips_large_is_no_damaged_tip() {
     let why = p.reason.as_deref().unwrap_or("");
     assert!(why.contains("≥ 0.5"), "{why}");
 }
+
+/// A dark 4 × 4 part of faint 7.6 px tips (Rust 1 260 313, held out:
+/// contrast 0.39 at gain 0.61, σ 15.4 DN, vignetting 0.46): the lattice
+/// search found no lattice and one tip's width gave the scale, 8.2 px
+/// against the truth's 7.6. Held fixed, that scale read twelve of the
+/// sixteen good pins bent. The inspection then found all sixteen tips,
+/// and their pitch now sets the scale (`scale_one_tip::ScaleStart`).
+#[test]
+fn tips_found_from_one_tips_width_give_the_scale_by_their_pitch() {
+    let (ok, wrong, ratio) = judge(1_260_313);
+    assert!(ok, "1260313: verdict wrong");
+    assert_eq!(wrong, 0, "1260313: pin statuses wrong");
+    assert!(
+        (ratio - 1.0).abs() < 0.01,
+        "1260313: scale {ratio:.4} × truth"
+    );
+}
