@@ -54,15 +54,35 @@ pub(crate) fn find_housing(
             (lat.py, lat.px)
         };
         let step = 0.5 * k / pitch;
-        let n = (PROFILE_PITCHES / step) as usize + 3;
         let lines = across_lines(across, k / pitch_across);
+        // The profiles end where any line leaves the image: beyond the
+        // frame the samples only repeat its border, and a vignetted
+        // corner's ramp cut flat there can read as a step, outermost of
+        // all (Rust 950 646: a dark 1 × 11 under vignetting 0.46, its
+        // far end's profile running 50 px past the frame; the window
+        // stood a pitch off, and stands right with the profile ended).
+        let at = |i: usize, f: f64| {
+            let t = start + dir * i as f64 * step;
+            if along_a { (t, f) } else { (f, t) }
+        };
+        let inside = |(a, b): (f64, f64)| {
+            let (x, y) = lat.to_image(a, b);
+            let (cx, cy) = coarse.from_full(x, y);
+            cx >= 0.0 && cy >= 0.0 && cx <= (coarse.w - 1) as f64 && cy <= (coarse.h - 1) as f64
+        };
+        let n = (0..(PROFILE_PITCHES / step) as usize + 3)
+            .take_while(|&i| lines.iter().all(|&f| inside(at(i, f))))
+            .count();
+        if n < 3 {
+            return None;
+        }
         let profiles: Vec<Vec<f32>> = lines
             .iter()
             .map(|&f| {
                 (0..n)
                     .map(|i| {
-                        let t = start + dir * i as f64 * step;
-                        if along_a { sample(t, f) } else { sample(f, t) }
+                        let (a, b) = at(i, f);
+                        sample(a, b)
                     })
                     .collect()
             })

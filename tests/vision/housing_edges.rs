@@ -185,3 +185,14 @@ fn a_few_pin_parts_outline_is_found_in_a_frame_turned_towards_it() {
         placed_right(seed);
     }
 }
+
+/// A dark 1 × 11 (Rust 950 646: vignetting 0.46, contrast 0.33, its
+/// first pin missing) whose far end's profile ran 50 px past the frame,
+/// where the samples only repeat the border: the window stood a pitch off
+/// (the missing pin read ok, a good end pin missing). The profiles now end
+/// at the frame (`housing::find_housing`).
+#[test]
+fn an_end_pin_missing_is_placed_by_an_outline_read_inside_the_frame() {
+    let ins = placed_right(950_646);
+    common::assert_note(&ins, "the housing centre decided");
+}
