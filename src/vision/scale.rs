@@ -55,6 +55,20 @@ pub struct ScaleEstimate {
     pub from_period: bool,
 }
 
+/// Where an inspection of a recipe without `mm_per_px` takes its first
+/// scale from ([`super::top::inspect_top_with`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum ScaleStart {
+    /// The lattice search ([`super::scale::estimate`]).
+    Search,
+    /// The lattice search, and a single tip found on a part of a few
+    /// positions may give the scale by its area.
+    SearchOrOneTip,
+    /// One tip's measured width, px ([`super::scale_one_tip::tip_width`]): a prior the pitch of
+    /// the tips then found overrules, as it does the search's.
+    TipWidth(f64),
+}
+
 struct Candidate {
     score: i64,
     support: usize,

@@ -23,7 +23,7 @@ use super::detect::{self, Smoothing};
 use super::gray::{CoarseCache, Plane, Px};
 use super::measure::{self, Localiser, Roi};
 use super::recipe::Recipe;
-use super::scale::{TipBlob, W_MIN, area_of_width, tip_blobs, width_of_area};
+use super::scale::{ScaleStart, TipBlob, W_MIN, area_of_width, tip_blobs, width_of_area};
 
 /// How many of the strongest blobs over the ladder are measured before
 /// giving up (a glint or a speck of debris may stand above the tip).
@@ -72,20 +72,6 @@ pub(super) fn tip_width<P: Px>(plane: &Plane<P>, sign: f32, recipe: &Recipe) -> 
         }
     }
     None
-}
-
-/// Where an inspection of a recipe without `mm_per_px` takes its first
-/// scale from ([`super::top::inspect_top_with`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum ScaleStart {
-    /// The lattice search ([`super::scale::estimate`]).
-    Search,
-    /// The lattice search, and a single tip found on a part of a few
-    /// positions may give the scale by its area.
-    SearchOrOneTip,
-    /// One tip's measured width, px ([`tip_width`]): a prior the pitch of
-    /// the tips then found overrules, as it does the search's.
-    TipWidth(f64),
 }
 
 /// The fewest tips in the grid's fit for their pitch to overrule one

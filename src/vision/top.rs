@@ -19,7 +19,7 @@ use super::housing::find_housing;
 use super::measure::{self, Roi};
 use super::recipe::Recipe;
 use super::result::*;
-use super::scale_one_tip::ScaleStart;
+use super::scale::ScaleStart;
 use super::tip_levels::{
     BLUR_RELATIVE, Candidate, LocalLevels, MIN_SNR, MIN_TIP_CONTRAST, OFF_HOLE, TIP_LIKE_AREA,
     area_ratio_of, contrast_ratio, core_contrast, dim_tip_on_position, housing_not_tip,

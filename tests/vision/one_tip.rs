@@ -243,7 +243,7 @@ fn an_empty_holes_ring_many_tips_large_is_no_damaged_tip() {
 /// search found no lattice and one tip's width gave the scale, 8.2 px
 /// against the truth's 7.6. Held fixed, that scale read twelve of the
 /// sixteen good pins bent. The inspection then found all sixteen tips,
-/// and their pitch now sets the scale (`scale_one_tip::ScaleStart`).
+/// and their pitch now sets the scale (`scale::ScaleStart`).
 #[test]
 fn tips_found_from_one_tips_width_give_the_scale_by_their_pitch() {
     let (ok, wrong, ratio) = judge(1_260_313);
