@@ -64,8 +64,9 @@ pub(crate) enum ScaleStart {
     /// The lattice search, and a single tip found on a part of a few
     /// positions may give the scale by its area.
     SearchOrOneTip,
-    /// One tip's measured width, px ([`super::scale_one_tip::tip_width`]): a prior the pitch of
-    /// the tips then found overrules, as it does the search's.
+    /// One tip's measured width, px
+    /// ([`super::scale_one_tip::tip_width`]): a prior the pitch of the
+    /// tips then found overrules, as it does the search's.
     TipWidth(f64),
 }
 
