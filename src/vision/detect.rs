@@ -205,6 +205,13 @@ pub enum Smoothing {
     /// must stand a pitch apart to count
     /// ([`super::top_candidates::last_passes`]).
     FaintLowFloor,
+    /// [`Smoothing::Normal`]'s box, its noise floor from the image's noise
+    /// alone ([`pixel_noise_floor`]) rather than from the top-hat's spread.
+    /// For the very last pass only, whose blobs must stand a pitch apart
+    /// to count: an image of almost no noise whose top-hat is mostly
+    /// structure (a housing's dark rim band, light rims about the holes,
+    /// vignetting) has a spread of that structure, above its tips.
+    NoiseOnlyFloor,
 }
 
 /// The noise floor's multiple of σ for every search but
@@ -230,7 +237,9 @@ pub const LOW_FLOOR_SIGMAS: f32 = 4.0;
 /// tips `pin_c` coarse px wide: the box is `2m + 1` across.
 pub fn smoothing_half_width(pin_c: f64, smoothing: Smoothing) -> usize {
     match smoothing {
-        Smoothing::Normal | Smoothing::HoleReach => (pin_c / 4.0).floor() as usize,
+        Smoothing::Normal | Smoothing::HoleReach | Smoothing::NoiseOnlyFloor => {
+            (pin_c / 4.0).floor() as usize
+        }
         Smoothing::Faint | Smoothing::FaintLowFloor => (pin_c / 2.5).round() as usize,
     }
 }
@@ -311,7 +320,13 @@ pub fn search_coarse_smoothed(
         Smoothing::FaintLowFloor => LOW_FLOOR_SIGMAS,
         _ => NOISE_FLOOR_SIGMAS,
     };
-    let noise_floor = tophat_noise_floor(coarse, &tophat, sigmas);
+    let noise_floor = match smoothing {
+        Smoothing::NoiseOnlyFloor => {
+            let m = smoothing_half_width(pin_c, smoothing);
+            pixel_noise_floor(coarse, &tophat, m, sigmas)
+        }
+        _ => tophat_noise_floor(coarse, &tophat, sigmas),
+    };
     let threshold = (0.35 * tip_contrast).max(noise_floor);
     let lab = label::label(w, h, |x, y| tophat[y * w + x] > threshold && inside(x, y));
     let blobs = split_blobs(&lab, &tophat, w, threshold, &too_big)
@@ -351,6 +366,30 @@ pub fn tophat_noise_floor(coarse: &Coarse, tophat: &[f32], sigmas: f32) -> f32 {
         *dev.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1
     };
     (med + sigmas * 1.4826 * mad).max(QUANTUM_FLOOR_STEPS * coarse.quantum)
+}
+
+/// A noise floor from the coarse image's noise alone: the top-hat's
+/// median plus `sigmas` σ of the smoothing box's mean (a box `2m + 1`
+/// coarse px across), σ of a coarse pixel from the median absolute
+/// difference of horizontal neighbours (an edge or a ramp moves few of
+/// them); never below the quantisation's terraces.
+pub fn pixel_noise_floor(coarse: &Coarse, tophat: &[f32], m: usize, sigmas: f32) -> f32 {
+    let (w, h) = (coarse.w, coarse.h);
+    let mut d: Vec<f32> = (0..h)
+        .flat_map(|y| (1..w).map(move |x| (x, y)))
+        .step_by(3)
+        .map(|(x, y)| (coarse.data[y * w + x] - coarse.data[y * w + x - 1]).abs())
+        .collect();
+    let mut t: Vec<f32> = tophat.iter().step_by(7).cloned().collect();
+    let median = |v: &mut [f32]| -> Option<f32> {
+        let mid = v.len() / 2;
+        (!v.is_empty()).then(|| *v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1)
+    };
+    let (Some(mad), Some(med)) = (median(&mut d), median(&mut t)) else {
+        return QUANTUM_FLOOR_STEPS * coarse.quantum;
+    };
+    let sigma = 1.4826 * mad / std::f32::consts::SQRT_2 / (2 * m + 1) as f32;
+    (med + sigmas * sigma).max(QUANTUM_FLOOR_STEPS * coarse.quantum)
 }
 
 /// Every 7th top-hat value, the sample the noise floor is read from;
@@ -555,6 +594,33 @@ pub(crate) fn check_contrast(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The floor from the image's noise: noise of σ 10 under bands of
+    /// 1000 (a housing's rim, light rims about holes: one column in five
+    /// of the image, their edges one difference in twenty) reads σ within
+    /// 10 % (the edges move the median absolute difference by about 6 %),
+    /// divided by the smoothing box's width (5 for m = 2) and added to the
+    /// top-hat's median: 6 σ / 5 = 12 above it.
+    #[test]
+    fn the_pixel_noise_floor_reads_the_noise_under_strong_structure() {
+        let (w, h) = (200usize, 200usize);
+        let mut rng = crate::vision::synth::Rng::new(7);
+        let band = |x: usize| if x % 40 < 8 { 1000.0 } else { 0.0 };
+        let data: Vec<f32> = (0..w * h)
+            .map(|i| band(i % w) + (10.0 * rng.normal()) as f32)
+            .collect();
+        let coarse = Coarse {
+            w,
+            h,
+            k: 1,
+            data,
+            quantum: 1.0,
+        };
+        let tophat: Vec<f32> = (0..w * h).map(|i| band(i % w) + 3.0).collect();
+        let floor = pixel_noise_floor(&coarse, &tophat, 2, 6.0);
+        let above = floor - 3.0;
+        assert!((above / 12.0 - 1.0).abs() < 0.1, "floor {floor}");
+    }
 
     /// Blocks clipped flat at the image's bright end leave the noise
     /// sample when they are more than a fifth of it, and only then; a flat
