@@ -260,43 +260,29 @@ fn last_resort_search<P: Px>(
             return Some((cs, cands));
         }
     }
-    let cs = detect::coarse_search_smoothed(
+    paired_search(
         plane,
         sign,
-        pin_px,
-        None,
-        n_pos,
+        (pin_px, pitch, n_pos),
+        candidates,
         detect::Smoothing::FaintLowFloor,
-    );
-    let cands = candidates(&cs);
-    (paired_tips(&cands, pitch) >= enough(n_pos)).then_some((cs, cands))
+    )
 }
 
-/// How many tip-like candidates a last pass must pair a pitch apart to
-/// count: a third of the recipe's positions, and two.
-fn enough(n_pos: Option<usize>) -> usize {
-    n_pos.unwrap_or(2).div_ceil(3).max(2)
-}
-
-/// The very last pass, after [`last_resort_search`]'s: the floor from the
-/// image's noise alone ([`detect::Smoothing::NoiseOnlyFloor`]), counted
-/// on the terms of its pass 3. An image of almost no noise whose top-hat
-/// is mostly structure has a spread of that structure, above its tips
-/// (Rust 1 280 221: a dark 2 × 2 of 30 px tips in light rims, σ 2 DN, a
-/// dark band round the housing, vignetting 0.39: one tip of four cleared
-/// the floor and three good pins read bent on a grid at the image's axes).
-fn noise_only_search<P: Px>(
+/// The search with `smoothing` and its candidates, where a third of the
+/// recipe's positions (and two) have a tip-like candidate with another a
+/// pitch away; the part is (tip width px, pitch px, positions).
+fn paired_search<P: Px>(
     plane: &Plane<P>,
     sign: f32,
-    pin_px: f64,
-    pitch: (f64, f64),
-    n_pos: Option<usize>,
+    (pin_px, pitch, n_pos): (f64, (f64, f64), Option<usize>),
     candidates: &dyn Fn(&CoarseSearch) -> Vec<Candidate>,
+    smoothing: detect::Smoothing,
 ) -> Option<(CoarseSearch, Vec<Candidate>)> {
-    let smoothing = detect::Smoothing::NoiseOnlyFloor;
     let cs = detect::coarse_search_smoothed(plane, sign, pin_px, None, n_pos, smoothing);
     let cands = candidates(&cs);
-    (paired_tips(&cands, pitch) >= enough(n_pos)).then_some((cs, cands))
+    let enough = n_pos.unwrap_or(2).div_ceil(3).max(2);
+    (paired_tips(&cands, pitch) >= enough).then_some((cs, cands))
 }
 
 /// The last passes ([`last_resort_search`]) where the searches before
@@ -327,11 +313,29 @@ pub(super) fn last_passes<P: Px>(
     if tips > 0 && (n_pos.unwrap_or(0) < 2 || pitch_pair(current, pitch)) {
         return None;
     }
+    // The very last: the floor from the image's noise alone
+    // ([`detect::Smoothing::NoiseOnlyFloor`]), counted on the terms of
+    // the low-floor pass. An image of almost no noise whose top-hat is
+    // mostly structure has a spread of that structure, above its tips
+    // (Rust 1 280 221: a dark 2 × 2 of 30 px tips in light rims, σ 2 DN, a
+    // dark band round the housing, vignetting 0.39: one tip of four
+    // cleared the floor and three good pins read bent on a grid at the
+    // image's axes). Texture blotchy at the tips' scale clears that floor
+    // too, paired a pitch apart by chance (Python seed 650 388): the pass
+    // counts only where it holds no more tip-like candidates than the
+    // recipe has positions.
     let better =
         |(_, c): &(CoarseSearch, Vec<Candidate>)| tips == 0 || paired_tips(c, pitch) > tips;
+    let noise_only = detect::Smoothing::NoiseOnlyFloor;
+    let few = |(_, c): &(CoarseSearch, Vec<Candidate>)| {
+        c.iter().filter(|c| c.pinlike).count() <= n_pos.unwrap_or(0)
+    };
     last_resort_search(plane, sign, pin_px, pitch, n_pos, candidates)
         .filter(better)
-        .or_else(|| noise_only_search(plane, sign, pin_px, pitch, n_pos, candidates).filter(better))
+        .or_else(|| {
+            paired_search(plane, sign, (pin_px, pitch, n_pos), candidates, noise_only).filter(few)
+        })
+        .filter(better)
 }
 
 /// Whether two tip-like candidates stand a pitch apart (within ±15 % of
