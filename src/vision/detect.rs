@@ -7,6 +7,7 @@
 use super::gray::{Coarse, Plane, Px};
 use super::label::{self, Blob};
 use super::morph;
+use super::side_row::median_f32;
 
 /// Choice of the coarse factor for a tip `pin_px` pixels wide: about five
 /// coarse pixels across a tip.
@@ -372,7 +373,8 @@ pub fn tophat_noise_floor(coarse: &Coarse, tophat: &[f32], sigmas: f32) -> f32 {
 /// median plus `sigmas` σ of the smoothing box's mean (a box `2m + 1`
 /// coarse px across), σ of a coarse pixel from the median absolute
 /// difference of horizontal neighbours (an edge or a ramp moves few of
-/// them); never below the quantisation's terraces.
+/// them); never below the quantisation's terraces (an empty image has
+/// only those).
 pub fn pixel_noise_floor(coarse: &Coarse, tophat: &[f32], m: usize, sigmas: f32) -> f32 {
     let (w, h) = (coarse.w, coarse.h);
     let mut d: Vec<f32> = (0..h)
@@ -381,13 +383,7 @@ pub fn pixel_noise_floor(coarse: &Coarse, tophat: &[f32], m: usize, sigmas: f32)
         .map(|(x, y)| (coarse.data[y * w + x] - coarse.data[y * w + x - 1]).abs())
         .collect();
     let mut t: Vec<f32> = tophat.iter().step_by(7).cloned().collect();
-    let median = |v: &mut [f32]| -> Option<f32> {
-        let mid = v.len() / 2;
-        (!v.is_empty()).then(|| *v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1)
-    };
-    let (Some(mad), Some(med)) = (median(&mut d), median(&mut t)) else {
-        return QUANTUM_FLOOR_STEPS * coarse.quantum;
-    };
+    let (mad, med) = (median_f32(&mut d), median_f32(&mut t));
     let sigma = 1.4826 * mad / std::f32::consts::SQRT_2 / (2 * m + 1) as f32;
     (med + sigmas * sigma).max(QUANTUM_FLOOR_STEPS * coarse.quantum)
 }
