@@ -209,7 +209,16 @@ pub(super) fn judge_extras<P: Px>(
                     && (m.touches_border
                         || (cut && (prominence < MIN_PROMINENCE || snr < MIN_SNR))) =>
             {
-                shoulder_extra(lo, c.seed, t, b, core_px, MIN_TIP_CONTRAST)
+                shoulder_extra(
+                    lo,
+                    c.seed,
+                    t,
+                    b,
+                    core_px,
+                    MIN_TIP_CONTRAST,
+                    MIN_LOCAL_CONTRAST,
+                )
+                .map(|p| (p.sh, p.rise, p.level))
             }
             _ => None,
         };
@@ -364,39 +373,99 @@ const FIXTURE_SIGMAS: f32 = 3.0;
 /// 945 439's debris and changes no other verdict.
 const FIXTURE_MIN_LEVEL: f64 = 0.4;
 
+/// How far above the fixture's median top-hat, in robust σ of it at the
+/// blob's scale (`top_fixture::FixtureSeed::z`), a compact blob on a bright
+/// part's fixture must rise to be counted without `FIXTURE_SIGMAS` of the
+/// pixel noise. Under heavy pixel noise, debris of a few tips' area rises
+/// one to two pixel σ over a bright fixture (Rust 1 300 923: 2.0 σ, the
+/// blob 13 σ at its scale; 1 300 922, 1 301 040: 0.9–1.3 σ) and was never
+/// counted: a per-pixel test asks of a blob what only its mean can show.
+/// The blob-scale σ holds the fixture's texture as well as the noise, so
+/// it is what tells a texture clump from debris. Measured (every
+/// fixture-pass protrusion on bright parts of Rust 900 000–930 000 and
+/// 1 300 000, 1 500 images each, and Python 590 000, 720 000 and
+/// 730 000, 400 each): texture and noise clumps that pass every other
+/// test stand 5.2–6.3 σ (Python 590 105 5.6, 730 107 6.3; Rust 910 676
+/// 5.2), debris found this way 7.8–83 σ.
+const FIXTURE_COMPACT_SIGMAS: f32 = 7.0;
+
+/// The largest area (in tips, tip-bright units) a blob may have to be
+/// counted by its blob-scale rise (`FIXTURE_COMPACT_SIGMAS`). A bright
+/// fixture's texture swells broad and low: on Python 590 290 (contrast
+/// 0.30, texture beside a low tip contrast) and 730 145 its clumps
+/// stood 7.1–7.7 σ at the blob's scale over 3.7–5.5 tips. Debris at least
+/// that large and that faint has to show `FIXTURE_SIGMAS` per pixel; the
+/// debris both renderers draw is 0.33–2.5 tips.
+const FIXTURE_COMPACT_AREA: f64 = 2.5;
+
+/// The rise over the fixture (and the core's, `CORE_SIGMAS` σ below its
+/// mean), as a fraction of the local tip contrast, a compact blob counted
+/// by its blob-scale rise must reach, where other protrusions must reach
+/// `MIN_LOCAL_CONTRAST`. Debris drawn at a tip's rim level over a bright
+/// fixture can rise as little as 0.18 of the tip contrast (Rust: rim
+/// 175 DN over a 140 DN fixture against 243 DN tips on a 50 DN housing);
+/// met at 0.184–0.247 (1 290 204, 1 301 391, 1 300 546). In
+/// the measured sets the clumps that stand `FIXTURE_COMPACT_SIGMAS` rise
+/// at most 0.12 (Rust 930 873: 53–55 σ over a flat fixture).
+const FIXTURE_COMPACT_MIN_RISE: f64 = 0.15;
+
 /// Debris on the fixture that never became a candidate
 /// (`top_fixture` says where to look): each place measured as a
 /// protrusion (`shoulder_extra`, the same tests as debris across the
-/// housing's edge), counted when it is new, rises `FIXTURE_SIGMAS` above
-/// the fixture's noise, lies within the distance rule and has at least the
-/// rule's area.
+/// housing's edge), counted when it is new, lies within the distance rule,
+/// has at least the rule's area and shows itself over the fixture: it
+/// rises `MIN_LOCAL_CONTRAST` and `FIXTURE_SIGMAS` of the pixel noise
+/// above it, or, on a bright part, it is compact
+/// (`FIXTURE_COMPACT_AREA`), its seed stands `FIXTURE_COMPACT_SIGMAS` at
+/// its scale and it rises `FIXTURE_COMPACT_MIN_RISE`.
 fn fixture_extras<P: Px>(lo: &Leftovers<'_, P>, rule: &ExtrasRule, extras: &mut Vec<ExtraResult>) {
     let pin_px = lo.pin_px();
     let core_px = rule.min_area_ratio * lo.tip_px;
-    let seeds = fixture_seeds(lo.coarse, lo.sim, lo.grid, pin_px, lo.sign < 0.0);
+    let bright = lo.sign > 0.0;
+    let seeds = fixture_seeds(lo.coarse, lo.sim, lo.grid, pin_px, !bright);
+    let min_rise = if bright {
+        FIXTURE_COMPACT_MIN_RISE
+    } else {
+        MIN_LOCAL_CONTRAST
+    };
     for seed in seeds {
         let far = |x: f64, y: f64| {
             extras
                 .iter()
                 .all(|e| (e.x_px - x).hypot(e.y_px - y) > 0.5 * pin_px)
         };
-        if !far(seed.0, seed.1) {
+        if !far(seed.at.0, seed.at.1) {
             continue;
         }
-        let Some((t, b)) = lo.levels.expected(seed.0, seed.1) else {
+        let Some((t, b)) = lo.levels.expected(seed.at.0, seed.at.1) else {
             continue;
         };
-        let Some((sh, rise, level)) = shoulder_extra(lo, seed, t, b, core_px, FIXTURE_MIN_LEVEL)
+        let Some(p) = shoulder_extra(lo, seed.at, t, b, core_px, FIXTURE_MIN_LEVEL, min_rise)
         else {
             continue;
         };
-        if lo.sign < 0.0 && on_dark_band(lo, &sh, (t, b), core_px) {
+        let sh = &p.sh;
+        if !bright && on_dark_band(lo, sh, (t, b), core_px) {
             continue;
         }
-        if far(sh.x, sh.y) && sh.rise >= FIXTURE_SIGMAS * sh.noise && lo.within_rule(rule, &sh) {
-            extras.push(shoulder_result(lo, rule, &sh, rise, level, ON_FIXTURE));
+        let per_pixel = sh.rise >= FIXTURE_SIGMAS * sh.noise && p.clear >= MIN_LOCAL_CONTRAST;
+        let compact = bright
+            && seed.z >= FIXTURE_COMPACT_SIGMAS
+            && sh.area_px / lo.tip_px <= FIXTURE_COMPACT_AREA;
+        if far(sh.x, sh.y) && (per_pixel || compact) && lo.within_rule(rule, sh) {
+            extras.push(shoulder_result(lo, rule, sh, p.rise, p.level, ON_FIXTURE));
         }
     }
+}
+
+/// A protrusion `shoulder_extra` accepted, with its rise and level as
+/// fractions of the local tip contrast.
+struct Protrusion {
+    sh: Shoulder,
+    rise: f64,
+    level: f64,
+    /// The lesser of the rise and the core's mean less `CORE_SIGMAS` σ.
+    clear: f64,
 }
 
 /// Whether a protrusion the fixture pass found on a dark part is a piece of
@@ -427,12 +496,11 @@ fn on_dark_band<P: Px>(
 
 /// A blob set aside as part of, or a ripple of, a brighter structure,
 /// measured again as its protrusion from that structure's outline
-/// (`top_shoulder`): `Some((shoulder, rise, level))`, rise and level as
-/// fractions of the local tip contrast (`t`, `b`), when the protrusion is
-/// separate (its mask clear of the window), off every pin, stands
-/// `MIN_LOCAL_CONTRAST` above the outline with its core `CORE_SIGMAS` σ
-/// above that too, reaches `min_level` of the tip level, and
-/// `MIN_SNR` above the noise. Area and distance are left to the caller.
+/// (`top_shoulder`), when the protrusion is separate (its mask clear of
+/// the window), off every pin, stands `min_rise` (a fraction of the local
+/// tip contrast, `t`, `b`) above the outline with its core `CORE_SIGMAS` σ
+/// above that too, reaches `min_level` of the tip level, and `MIN_SNR`
+/// above the noise. Area and distance are left to the caller.
 fn shoulder_extra<P: Px>(
     lo: &Leftovers<'_, P>,
     seed: (f64, f64),
@@ -440,7 +508,8 @@ fn shoulder_extra<P: Px>(
     b: f32,
     core_px: f64,
     min_level: f64,
-) -> Option<(Shoulder, f64, f64)> {
+    min_rise: f64,
+) -> Option<Protrusion> {
     let pin_px = lo.pin_px();
     let sh = measure_shoulder(lo.plane, lo.sign, seed, pin_px, t, core_px)?;
     let tipc = (t - b) as f64;
@@ -458,12 +527,15 @@ fn shoulder_extra<P: Px>(
     let level = contrast_ratio(sh.base + sh.rise, t, b);
     let core_sd = sh.noise as f64 / core_px.max(1.0).sqrt() / tipc;
     let core = sh.core as f64 / tipc;
-    (!on_pin
-        && rise >= MIN_LOCAL_CONTRAST
-        && core - CORE_SIGMAS * core_sd >= MIN_LOCAL_CONTRAST
-        && level >= min_level
-        && sh.snr() >= MIN_SNR)
-        .then_some((sh, rise, level))
+    let clear = rise.min(core - CORE_SIGMAS * core_sd);
+    (!on_pin && clear >= min_rise && level >= min_level && sh.snr() >= MIN_SNR).then_some(
+        Protrusion {
+            sh,
+            rise,
+            level,
+            clear,
+        },
+    )
 }
 
 /// The tip and background levels the nearest tips establish (`t`, `b`, in

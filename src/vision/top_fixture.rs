@@ -66,19 +66,30 @@ const SEED_LEVEL: f32 = 0.1;
 /// How many places are measured at most (the highest peaks first).
 const MAX_SEEDS: usize = 40;
 
+/// A place on the fixture worth measuring as debris.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct FixtureSeed {
+    /// Full-resolution pixels.
+    pub at: (f64, f64),
+    /// How far its peak rises above the fixture's median top-hat, in robust
+    /// σ of it (the fixture's noise and texture at the blob's scale);
+    /// infinite on a fixture with neither.
+    pub z: f32,
+}
+
 /// Full-resolution places on the fixture worth measuring as debris:
 /// coarse residual blobs outside `grid` (the grid's extent grown by 0.4
 /// pitch, part frame, mm), tip-sized or smaller, whose peak
 /// rises `SEED_SIGMAS` robust σ above the fixture's median top-hat and
 /// `SEED_LEVEL` of the tip contrast; on a dark part (`dark`) also
-/// `LOCAL_SIGMAS` above its neighbourhood's.
+/// `LOCAL_SIGMAS` above its neighbourhood's. The highest first.
 pub(super) fn fixture_seeds(
     cs: &CoarseSearch,
     sim: &Similarity,
     grid: [f64; 4],
     pin_px: f64,
     dark: bool,
-) -> Vec<(f64, f64)> {
+) -> Vec<FixtureSeed> {
     let (w, h) = (cs.coarse.w, cs.coarse.h);
     if cs.coarse.data.len() != w * h || w < 3 || h < 3 {
         return Vec::new();
@@ -111,7 +122,7 @@ pub(super) fn fixture_seeds(
     let level = (med + SEED_SIGMAS * sigma).max(SEED_LEVEL * cs.tip_contrast);
     let lab = label::label(w, h, |x, y| on_fixture[y * w + x] && th[y * w + x] > level);
     let tip_area_c = pin_c * pin_c;
-    let mut out: Vec<(f32, (f64, f64))> = Vec::new();
+    let mut out: Vec<(f32, FixtureSeed)> = Vec::new();
     for b in &lab.blobs {
         if b.area as f64 > 3.0 * tip_area_c {
             continue;
@@ -132,7 +143,13 @@ pub(super) fn fixture_seeds(
                 continue;
             }
         }
-        out.push((best.0, cs.coarse.to_full(best.1 as f64, best.2 as f64)));
+        let z = if sigma > 0.0 {
+            (best.0 - med) / sigma
+        } else {
+            f32::INFINITY
+        };
+        let at = cs.coarse.to_full(best.1 as f64, best.2 as f64);
+        out.push((best.0, FixtureSeed { at, z }));
     }
     out.sort_by(|a, b| b.0.total_cmp(&a.0));
     out.truncate(MAX_SEEDS);

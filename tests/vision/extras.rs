@@ -106,6 +106,47 @@ fn one_extra_where_the_generator_drew_it(seeds: &[u64]) {
     }
 }
 
+/// Compact debris on a bright part's fixture (tuning seeds of
+/// 2026-12-08): under heavy pixel noise on a 3 × 14 at contrast 0.98 and
+/// σ 14 DN (1 300 923), a 1 × 4 at contrast 0.32 (1 301 040) and a
+/// 3 × 4 at σ 14 DN (910 630) the debris rises 0.3–0.5 of the tip
+/// contrast over the fixture, only 1.3–2.0 σ of the pixel noise; over a
+/// fixture nearly as bright as its rim level (1 290 204) it rises 0.21,
+/// its core 0.18 clear. The fixture pass refused all four; at the blob's
+/// scale each stands 7.8–15 σ of the fixture's noise and texture. One
+/// extra, where the generator drew it.
+#[test]
+fn compact_debris_on_a_bright_fixture_is_found() {
+    one_extra_where_the_generator_drew_it(&[1_300_923, 1_301_040, 910_630, 1_290_204]);
+}
+
+/// What the fixture pass's compact-blob test must still refuse on bright
+/// parts: clumps 53–55 σ clear of a flat fixture's noise whose cores
+/// stand only 0.10–0.12 of the tip contrast clear of it (930 873, no debris drawn), and the
+/// texture clumps of a noise-free fixture that rise 0.19–0.24 of the tip
+/// contrast but stand only 5.2–5.4 σ of the texture at their scale
+/// (910 676, at the places below; the part fails on its pins and two
+/// other blobs).
+#[test]
+fn weak_or_low_clumps_on_a_bright_fixture_are_no_debris() {
+    let (_, found, truth, what) = judge(930_873);
+    assert_eq!(truth, 0, "930873: the generator drew no debris");
+    assert_eq!(found, 0, "930873: spurious debris: {what:?}");
+    let (case, r, ins) = common::envelope_case(910_676);
+    assert!(
+        r.truth.extras.is_empty(),
+        "910676: the generator drew no debris"
+    );
+    for (x, y) in [(348.0, 179.0), (342.0, 36.0), (369.0, 599.0)] {
+        let near: Vec<_> = ins
+            .extras
+            .iter()
+            .filter(|e| (e.x_px - x).hypot(e.y_px - y) < case.factors.tip_px)
+            .collect();
+        assert!(near.is_empty(), "910676: a texture clump counted: {near:?}");
+    }
+}
+
 /// Clumps of a band or of a surface as bright as themselves, each clear
 /// of its window, that passed every test of a separate blob (tuning seeds
 /// of 2026-12-04): on a dark 1 × 7 (945 815: contrast 0.39, noise 14.6 DN,
